@@ -1,0 +1,122 @@
+"""
+Shared pytest harness: an isolated ROS graph and helpers to run nodes and call services.
+
+Every test session claims a ROS_DOMAIN_ID that no other run on this machine holds and keeps
+discovery on localhost, so parallel runs never see each other's nodes. rclpy is initialised
+once per session, only when a test asks for it; the core tests never touch ROS.
+"""
+
+import fcntl
+import os
+import tempfile
+import threading
+import time
+
+import pytest
+
+_DOMAIN_LOCK = None
+
+
+def _claim_ros_domain():
+    """Hold a lock file for a free ROS domain id for as long as this process lives."""
+    global _DOMAIN_LOCK
+    first = 1 + os.getpid() % 100
+    for offset in range(101):
+        domain_id = 1 + (first + offset) % 101
+        path = os.path.join(tempfile.gettempdir(), f'service_tutorial-ros-domain-{domain_id}.lock')
+        lock = open(path, 'w')
+        try:
+            fcntl.flock(lock, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError:
+            lock.close()
+            continue
+        _DOMAIN_LOCK = lock
+        return domain_id
+    raise RuntimeError('every ROS domain id 1..101 is held by another test run')
+
+
+# Set before rclpy (and any node started by a test) reads the environment.
+os.environ['ROS_DOMAIN_ID'] = str(_claim_ros_domain())
+os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
+os.environ.pop('ROS_LOCALHOST_ONLY', None)
+
+
+def pytest_configure(config):
+    """Register the markers the suite uses."""
+    config.addinivalue_line('markers', 'flake8: code style check')
+    config.addinivalue_line('markers', 'pep257: docstring style check')
+    config.addinivalue_line('markers', 'linter: static check, not behaviour')
+    config.addinivalue_line('markers', 'ros: needs rclpy and the built srv_interfaces')
+
+
+@pytest.fixture(scope='session')
+def rclpy_session():
+    """Initialise rclpy once for the whole session on the claimed domain."""
+    import rclpy
+    rclpy.init()
+    yield rclpy
+    rclpy.try_shutdown()
+
+
+class RosHarness:
+    """A real multi-threaded executor spinning in the background, plus a client node."""
+
+    def __init__(self):
+        from rclpy.executors import MultiThreadedExecutor
+        from rclpy.node import Node
+        self.executor = MultiThreadedExecutor(num_threads=4)
+        self.client_node = Node('test_client')
+        self.executor.add_node(self.client_node)
+        self._nodes = [self.client_node]
+        self._thread = threading.Thread(target=self.executor.spin, daemon=True)
+        self._thread.start()
+
+    def add_node(self, node):
+        """Spin a node on the background executor; it is destroyed after the test."""
+        self._nodes.append(node)
+        self.executor.add_node(node)
+        return node
+
+    def call(self, srv_type, service_name, request, *, timeout=10.0):
+        """Call a service from the client node and return its response or fail the test."""
+        client = self.client_node.create_client(srv_type, service_name)
+        try:
+            assert client.wait_for_service(timeout_sec=timeout), \
+                f'service {service_name} did not appear within {timeout} s'
+            future = client.call_async(request)
+            assert self.wait_for(future.done, timeout=timeout), \
+                f'service {service_name} did not answer within {timeout} s'
+            return future.result()
+        finally:
+            self.client_node.destroy_client(client)
+
+    def subscribe(self, msg_type, topic, *, depth=100):
+        """Collect every message on a topic into a list that grows while the test runs."""
+        received = []
+        self.client_node.create_subscription(msg_type, topic, received.append, depth)
+        return received
+
+    @staticmethod
+    def wait_for(predicate, *, timeout=10.0, period=0.002):
+        """Wait until predicate() is true; return whether it became true in time."""
+        deadline = time.monotonic() + timeout
+        while time.monotonic() < deadline:
+            if predicate():
+                return True
+            time.sleep(period)
+        return bool(predicate())
+
+    def shutdown(self):
+        """Stop spinning and destroy every node the test used."""
+        self.executor.shutdown(timeout_sec=5.0)
+        self._thread.join(timeout=5.0)
+        for node in self._nodes:
+            node.destroy_node()
+
+
+@pytest.fixture
+def ros(rclpy_session):
+    """Give a test a spinning executor and a client node, torn down afterwards."""
+    harness = RosHarness()
+    yield harness
+    harness.shutdown()
