@@ -59,22 +59,26 @@ def rclpy_session():
 
 
 class RosHarness:
-    """A real multi-threaded executor spinning in the background, plus a client node."""
+    """
+    Nodes spinning on real executors in background threads, plus a client node.
+
+    Each node gets its own single-threaded executor and thread, as if it ran in a process of
+    its own, so a node's callbacks keep the ordering they have under `ros2 run`.
+    """
 
     def __init__(self):
-        from rclpy.executors import MultiThreadedExecutor
         from rclpy.node import Node
-        self.executor = MultiThreadedExecutor(num_threads=4)
-        self.client_node = Node('test_client')
-        self.executor.add_node(self.client_node)
-        self._nodes = [self.client_node]
-        self._thread = threading.Thread(target=self.executor.spin, daemon=True)
-        self._thread.start()
+        self._spinning = []
+        self.client_node = self.add_node(Node('test_client'))
 
     def add_node(self, node):
-        """Spin a node on the background executor; it is destroyed after the test."""
-        self._nodes.append(node)
-        self.executor.add_node(node)
+        """Spin a node on an executor of its own; it is destroyed after the test."""
+        from rclpy.executors import SingleThreadedExecutor
+        executor = SingleThreadedExecutor()
+        executor.add_node(node)
+        thread = threading.Thread(target=executor.spin, daemon=True)
+        thread.start()
+        self._spinning.append((node, executor, thread))
         return node
 
     def call(self, srv_type, service_name, request, *, timeout=10.0):
@@ -107,10 +111,10 @@ class RosHarness:
         return bool(predicate())
 
     def shutdown(self):
-        """Stop spinning and destroy every node the test used."""
-        self.executor.shutdown(timeout_sec=5.0)
-        self._thread.join(timeout=5.0)
-        for node in self._nodes:
+        """Stop every executor and destroy every node the test used."""
+        for node, executor, thread in reversed(self._spinning):
+            executor.shutdown(timeout_sec=5.0)
+            thread.join(timeout=5.0)
             node.destroy_node()
 
 

@@ -1,0 +1,426 @@
+"""
+The MuJoCo world node: the Gazebo of this tutorial.
+
+It steps a service_tutorial.world.World and translates ROS to and from it: the model services
+under /mujoco/, /clock, and cmd_vel, odom and joint_states for every diff-drive robot.
+Stepping runs in a timer of the node's single callback group, so a service callback and a
+physics step never run at the same time and no locks are needed.
+"""
+
+import math
+import os
+import time
+
+from ament_index_python.packages import get_package_share_directory
+from geometry_msgs.msg import Twist
+from nav_msgs.msg import Odometry
+import rclpy
+from rclpy.executors import ExternalShutdownException
+from rclpy.node import Node
+from rclpy.validate_namespace import validate_namespace
+from rosgraph_msgs.msg import Clock
+from sensor_msgs.msg import JointState
+from srv_interfaces.srv import DeleteModel, GetModelList, GetModelState, SetModelState
+from srv_interfaces.srv import SpawnModel
+from std_srvs.srv import Empty
+import yaml
+
+from service_tutorial.world import World, WorldError
+
+PACKAGE = 'service_tutorial'
+# Longest stretch of wall time one timer tick may spend stepping before it lets services run.
+STEP_BUDGET = 0.005
+
+
+def load_default_parameters():
+    """Read the node's default parameters from config/world.yaml in the package share."""
+    path = os.path.join(get_package_share_directory(PACKAGE), 'config', 'world.yaml')
+    with open(path) as config_file:
+        return yaml.safe_load(config_file)['mujoco']['ros__parameters']
+
+
+def resolve_model_path(model):
+    """Find a model file: an absolute path, or a file in the package's models/ folder."""
+    if os.path.isabs(model):
+        return model
+    return os.path.join(get_package_share_directory(PACKAGE), 'models', model)
+
+
+def time_msg(seconds):
+    """Convert simulation seconds to a builtin_interfaces/Time."""
+    msg = Clock().clock
+    msg.sec = int(seconds)
+    msg.nanosec = int(round((seconds - msg.sec) * 1e9))
+    if msg.nanosec >= 1_000_000_000:
+        msg.sec += 1
+        msg.nanosec -= 1_000_000_000
+    return msg
+
+
+def pose_from_msg(pose):
+    """Split a geometry_msgs/Pose into position and a MuJoCo (w, x, y, z) quaternion."""
+    q = pose.orientation
+    return ((pose.position.x, pose.position.y, pose.position.z), (q.w, q.x, q.y, q.z))
+
+
+def fill_pose_msg(pose, position, orientation):
+    """Write a position and a MuJoCo (w, x, y, z) quaternion into a geometry_msgs/Pose."""
+    pose.position.x, pose.position.y, pose.position.z = (float(v) for v in position)
+    q = pose.orientation
+    q.w, q.x, q.y, q.z = (float(v) for v in orientation)
+
+
+def fill_twist_msg(twist, linear, angular):
+    """Write linear and angular velocity vectors into a geometry_msgs/Twist."""
+    twist.linear.x, twist.linear.y, twist.linear.z = (float(v) for v in linear)
+    twist.angular.x, twist.angular.y, twist.angular.z = (float(v) for v in angular)
+
+
+class RobotTopics:
+    """The topics of one diff-drive robot: cmd_vel in, odom and joint_states out."""
+
+    def __init__(self, node, model_name, namespace):
+        prefix = namespace.rstrip('/') + '/' if namespace else ''
+        self.model_name = model_name
+        self.cmd_vel_sub = node.create_subscription(
+            Twist, prefix + 'cmd_vel',
+            lambda msg: node.cmd_vel_callback(model_name, msg), 10)
+        self.odom_pub = node.create_publisher(Odometry, prefix + 'odom', 10)
+        self.joint_states_pub = node.create_publisher(JointState, prefix + 'joint_states', 10)
+        self._node = node
+
+    def destroy(self):
+        """Remove the robot's topics from the node."""
+        self._node.destroy_subscription(self.cmd_vel_sub)
+        self._node.destroy_publisher(self.odom_pub)
+        self._node.destroy_publisher(self.joint_states_pub)
+
+
+class MujocoWorld(Node):
+    """Serves a MuJoCo world the way gazebo_ros serves Gazebo's."""
+
+    def __init__(self, **kwargs):
+        super().__init__('mujoco', **kwargs)
+        defaults = load_default_parameters()
+        for name, value in defaults.items():
+            self.declare_parameter(name, value)
+        param = self.get_parameter
+
+        self.real_time_factor = max(0.0, param('real_time_factor').value)
+        self.world = World(timestep=param('timestep').value,
+                           cmd_vel_timeout=param('cmd_vel_timeout').value)
+        self._clock_period = 1.0 / param('clock_publish_rate').value
+        self._odom_period = 1.0 / param('odom_publish_rate').value
+        self._joint_state_period = 1.0 / param('joint_state_publish_rate').value
+        self._next_clock = self._next_odom = self._next_joint_states = 0.0
+        self.robots = {}
+
+        self.clock_pub = self.create_publisher(Clock, '/clock', 10)
+        self.spawn_srv = self.create_service(
+            SpawnModel, '~/spawn_urdf_model', self.spawn_model_callback)
+        self.delete_srv = self.create_service(
+            DeleteModel, '~/delete_model', self.delete_model_callback)
+        self.reset_simulation_srv = self.create_service(
+            Empty, '~/reset_simulation', self.reset_simulation_callback)
+        self.reset_world_srv = self.create_service(
+            Empty, '~/reset_world', self.reset_world_callback)
+        self.pause_srv = self.create_service(
+            Empty, '~/pause_physics', self.pause_physics_callback)
+        self.unpause_srv = self.create_service(
+            Empty, '~/unpause_physics', self.unpause_physics_callback)
+        self.model_list_srv = self.create_service(
+            GetModelList, '~/get_model_list', self.get_model_list_callback)
+        self.get_state_srv = self.create_service(
+            GetModelState, '~/get_model_state', self.get_model_state_callback)
+        self.set_state_srv = self.create_service(
+            SetModelState, '~/set_model_state', self.set_model_state_callback)
+
+        self._spawn_start_up_models()
+        if param('paused').value:
+            self.world.pause()
+        self.viewer = None
+        if param('gui').value:
+            self._open_viewer()
+
+        # Free-running stepping uses a zero-period timer: it fires on every executor turn,
+        # and the executor serves pending service calls between two turns.
+        period = 0.0 if self.real_time_factor == 0.0 else 0.002
+        self._anchor_real_time()
+        self.step_timer = self.create_timer(period, self.step_callback)
+        self.publish_clock()
+        self.get_logger().info(
+            f'MuJoCo world ready: {", ".join(self.world.model_names()) or "no models"}, '
+            f'timestep {self.world.timestep} s, real_time_factor {self.real_time_factor}')
+
+    # --- stepping -----------------------------------------------------------------------------
+
+    def _anchor_real_time(self):
+        self._wall_anchor = time.monotonic()
+        self._sim_anchor = self.world.time
+
+    def step_callback(self):
+        """Advance the physics to keep pace with the wall clock, then publish what is due."""
+        world = self.world
+        if world.paused:
+            self._anchor_real_time()
+        elif self.real_time_factor == 0.0:
+            deadline = time.monotonic() + STEP_BUDGET
+            while time.monotonic() < deadline:
+                world.step(self._steps_to_next_publication())
+                self.publish_due()
+        else:
+            target = self._sim_anchor + (time.monotonic() - self._wall_anchor) * self.real_time_factor
+            behind = int((target - world.time) / world.timestep)
+            if behind > 0.1 / world.timestep:
+                # More than 100 ms behind: the machine cannot keep up; do not try to catch up.
+                behind = int(0.1 / world.timestep)
+                self._anchor_real_time()
+            while behind > 0:
+                steps = min(behind, self._steps_to_next_publication())
+                world.step(steps)
+                behind -= steps
+                self.publish_due()
+        self.publish_due()
+        if self.viewer is not None:
+            self._sync_viewer()
+
+    def _steps_to_next_publication(self):
+        due = min(self._next_clock, self._next_odom, self._next_joint_states)
+        return max(1, math.ceil((due - self.world.time) / self.world.timestep - 1e-9))
+
+    def publish_due(self):
+        """Publish /clock, odometry and joint states whose time has come."""
+        now = self.world.time
+        if now >= self._next_clock:
+            self.publish_clock()
+        if now >= self._next_odom:
+            self._next_odom = now + self._odom_period
+            for robot in self.robots.values():
+                self.publish_odometry(robot, now)
+        if now >= self._next_joint_states:
+            self._next_joint_states = now + self._joint_state_period
+            for robot in self.robots.values():
+                self.publish_joint_states(robot, now)
+
+    def publish_clock(self):
+        """Publish the simulation time on /clock."""
+        now = self.world.time
+        self._next_clock = now + self._clock_period
+        msg = Clock()
+        msg.clock = time_msg(now)
+        self.clock_pub.publish(msg)
+
+    def publish_odometry(self, robot, now):
+        """Publish a robot's odometry in its odometry frame (REP 105)."""
+        odometry = self.world.odometry(robot.model_name)
+        msg = Odometry()
+        msg.header.stamp = time_msg(now)
+        msg.header.frame_id = odometry.odometry_frame
+        msg.child_frame_id = odometry.robot_base_frame
+        fill_pose_msg(msg.pose.pose, odometry.position, odometry.orientation)
+        fill_twist_msg(msg.twist.twist, odometry.linear_velocity, odometry.angular_velocity)
+        robot.odom_pub.publish(msg)
+
+    def publish_joint_states(self, robot, now):
+        """Publish the positions and velocities of a robot's moving joints."""
+        names, positions, velocities = self.world.joint_state(robot.model_name)
+        msg = JointState()
+        msg.header.stamp = time_msg(now)
+        msg.name = list(names)
+        msg.position = [float(v) for v in positions]
+        msg.velocity = [float(v) for v in velocities]
+        robot.joint_states_pub.publish(msg)
+
+    def cmd_vel_callback(self, model_name, msg):
+        """Hand a robot's velocity command to the world; the next steps apply it."""
+        try:
+            self.world.command_velocity(model_name, msg.linear.x, msg.angular.z)
+        except WorldError as error:
+            self.get_logger().warning(
+                f'ignored cmd_vel for {model_name}: {error}', throttle_duration_sec=1.0)
+
+    # --- model services -----------------------------------------------------------------------
+
+    def _spawn_start_up_models(self):
+        param = self.get_parameter
+        files = list(param('models').value)
+        names = list(param('model_names').value) or [
+            os.path.splitext(os.path.basename(f))[0] for f in files]
+        namespaces = list(param('model_namespaces').value) or [''] * len(files)
+        poses = list(param('model_poses').value) or [0.0] * 4 * len(files)
+        if not len(files) == len(names) == len(namespaces) == len(poses) // 4:
+            raise ValueError('models, model_names, model_namespaces and model_poses '
+                             '(4 numbers each) must describe the same number of models')
+        for index, (model, name, namespace) in enumerate(zip(files, names, namespaces)):
+            x, y, z, yaw = poses[4 * index:4 * index + 4]
+            orientation = (math.cos(yaw / 2), 0.0, 0.0, math.sin(yaw / 2))
+            with open(resolve_model_path(model)) as model_file:
+                urdf = model_file.read()
+            self.spawn_model(name, urdf, namespace, (x, y, z), orientation, '',
+                             base_dir=os.path.dirname(resolve_model_path(model)))
+
+    def spawn_model(self, name, urdf, namespace, position, orientation, reference_frame,
+                    base_dir=None):
+        """Add a model to the world and give its diff drive, if any, its topics."""
+        namespace = namespace.strip()
+        if namespace:
+            if not namespace.startswith('/'):
+                namespace = '/' + namespace
+            try:
+                validate_namespace(namespace)
+            except Exception as error:  # rclpy raises its own InvalidNamespaceException
+                raise WorldError(f'robot_namespace {namespace!r} is not a valid ROS namespace: '
+                                 f'{getattr(error, "error_msg", error)}') from None
+        self.world.spawn_urdf(name, urdf, position=position, orientation=orientation,
+                              reference_frame=reference_frame, namespace=namespace,
+                              base_dir=base_dir)
+        if name in self.world.diff_drive_models():
+            try:
+                self.robots[name] = RobotTopics(self, name, namespace)
+            except Exception:
+                self.world.delete_model(name)
+                raise
+        if self.viewer is not None:
+            self._open_viewer()
+
+    def spawn_model_callback(self, request, response):
+        """Spawn a URDF model; failures are answered, never raised."""
+        def spawn():
+            position, orientation = pose_from_msg(request.initial_pose)
+            self.spawn_model(request.model_name, request.model_xml, request.robot_namespace,
+                             position, orientation, request.reference_frame)
+            return f'SpawnModel: Successfully spawned entity {request.model_name!r}'
+        return self._answer('SpawnModel', spawn, response)
+
+    def delete_model_callback(self, request, response):
+        """Delete a model and its topics."""
+        def delete():
+            self.world.delete_model(request.model_name)
+            robot = self.robots.pop(request.model_name, None)
+            if robot is not None:
+                robot.destroy()
+            if self.viewer is not None:
+                self._open_viewer()
+            return f'DeleteModel: Successfully deleted model {request.model_name!r}'
+        return self._answer('DeleteModel', delete, response)
+
+    def get_model_list_callback(self, request, response):
+        """List every model in spawn order."""
+        response.model_names = self.world.model_names()
+        response.success = True
+        response.status_message = 'GetModelList: got properties'
+        return response
+
+    def get_model_state_callback(self, request, response):
+        """Report a model's pose and twist in the requested frame."""
+        def get_state():
+            state = self.world.get_model_state(request.model_name, request.reference_frame)
+            response.header.stamp = time_msg(self.world.time)
+            response.header.frame_id = request.reference_frame or 'world'
+            fill_pose_msg(response.pose, state.position, state.orientation)
+            fill_twist_msg(response.twist, state.linear_velocity, state.angular_velocity)
+            return 'GetModelState: got properties'
+        return self._answer('GetModelState', get_state, response)
+
+    def set_model_state_callback(self, request, response):
+        """Move a model to a pose and give it a twist."""
+        def set_state():
+            position, orientation = pose_from_msg(request.pose)
+            twist = request.twist
+            self.world.set_model_state(
+                request.model_name, position=position, orientation=orientation,
+                linear_velocity=(twist.linear.x, twist.linear.y, twist.linear.z),
+                angular_velocity=(twist.angular.x, twist.angular.y, twist.angular.z),
+                reference_frame=request.reference_frame)
+            return f'SetModelState: set state of {request.model_name!r}'
+        return self._answer('SetModelState', set_state, response)
+
+    def _answer(self, service, operation, response):
+        """Run a world operation and report its outcome in success and status_message."""
+        try:
+            response.status_message = operation()
+            response.success = True
+        except WorldError as error:
+            response.success = False
+            response.status_message = f'{service}: {error}'
+            self.get_logger().warning(response.status_message)
+        except Exception as error:  # a bug must not take the world down with it
+            response.success = False
+            response.status_message = f'{service}: internal error: {error!r}'
+            self.get_logger().error(response.status_message)
+        return response
+
+    def reset_simulation_callback(self, request, response):
+        """Put every model back at its spawn pose and the clock back to zero."""
+        self.world.reset_simulation()
+        self._after_reset()
+        self.get_logger().info('simulation reset: time 0, every model at its spawn pose')
+        return response
+
+    def reset_world_callback(self, request, response):
+        """Put every model back at its spawn pose; time goes on."""
+        self.world.reset_world()
+        self._after_reset()
+        self.get_logger().info('world reset: every model at its spawn pose')
+        return response
+
+    def _after_reset(self):
+        self._anchor_real_time()
+        self._next_odom = self._next_joint_states = self.world.time
+        self.publish_clock()
+        self.publish_due()
+
+    def pause_physics_callback(self, request, response):
+        """Stop stepping; services and /clock keep answering."""
+        self.world.pause()
+        return response
+
+    def unpause_physics_callback(self, request, response):
+        """Resume stepping from where it stopped."""
+        self.world.unpause()
+        self._anchor_real_time()
+        return response
+
+    # --- viewer -------------------------------------------------------------------------------
+
+    def _open_viewer(self):
+        """(Re)open MuJoCo's passive viewer on the current model; spawns rebuild the model."""
+        import mujoco.viewer
+        if self.viewer is not None:
+            self.viewer.close()
+        try:
+            self.viewer = mujoco.viewer.launch_passive(self.world.model, self.world.data)
+        except Exception as error:  # no display, no OpenGL
+            self.viewer = None
+            self.get_logger().error(f'gui:=true but the viewer could not open: {error}')
+
+    def _sync_viewer(self):
+        if self.viewer.is_running():
+            self.viewer.sync()
+
+    def destroy_node(self):
+        """Close the viewer along with the node."""
+        if self.viewer is not None:
+            self.viewer.close()
+            self.viewer = None
+        return super().destroy_node()
+
+
+def main(args=None):
+    """Run the MuJoCo world until Ctrl-C."""
+    rclpy.init(args=args)
+    node = None
+    try:
+        node = MujocoWorld()
+        rclpy.spin(node)
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+    finally:
+        if node is not None:
+            node.destroy_node()
+        rclpy.try_shutdown()
+
+
+if __name__ == '__main__':
+    main()
+
