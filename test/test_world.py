@@ -1,0 +1,458 @@
+"""The world: spawning, deleting, frames, model state, resets, the diff drive and recovery."""
+
+import logging
+import math
+import os
+import time
+
+import mujoco
+import numpy as np
+import pytest
+from service_tutorial.world import World
+from service_tutorial.world import WorldError
+
+MODELS = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), 'models')
+TINYBOT = os.path.join(MODELS, 'tinybot.urdf')
+R2D2 = os.path.join(MODELS, 'r2d2.urdf')
+FACING_MINUS_Y = (0.707, 0.0, 0.0, -0.707)
+
+
+def read(path):
+    with open(path) as urdf_file:
+        return urdf_file.read()
+
+
+def heading(quaternion):
+    w, x, y, z = quaternion
+    return math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
+
+
+def yaw_quaternion(yaw):
+    return (math.cos(yaw / 2.0), 0.0, 0.0, math.sin(yaw / 2.0))
+
+
+def tinybot_state(world):
+    """Return everything that describes tinybot's motion as one vector."""
+    state = world.get_model_state('tinybot')
+    _, positions, velocities = world.joint_state('tinybot')
+    return np.concatenate([state.position, state.orientation, state.linear_velocity,
+                           state.angular_velocity, positions, velocities])
+
+
+def drive(worlds, linear_x, angular_z, seconds, period=10):
+    """Command the tinybot of every world at 50 Hz, stepping the worlds in lockstep."""
+    for _ in range(round(seconds / (period * worlds[0].timestep))):
+        for world in worlds:
+            world.command_velocity('tinybot', linear_x, angular_z)
+            world.step(period)
+
+
+@pytest.fixture
+def world():
+    return World()
+
+
+@pytest.fixture
+def tinybot_world():
+    world = World()
+    world.spawn_urdf_file('tinybot', TINYBOT)
+    world.step(250)
+    return world
+
+
+def test_r2d2_dropped_from_one_metre_lands_upright_facing_minus_y(world):
+    world.spawn_urdf('r2d2', read(R2D2), position=(-2.0, 1.0, 1.0), orientation=FACING_MINUS_Y,
+                     reference_frame='world')
+    world.step(1000)
+    state = world.get_model_state('r2d2')
+    # base_footprint rests on the floor, sunk by the contact softness only.
+    assert abs(state.position[2]) < 0.01
+    np.testing.assert_allclose(state.position[:2], [-2.0, 1.0], atol=0.02)
+    assert heading(state.orientation) == pytest.approx(-math.pi / 2.0, abs=0.03)
+    assert np.linalg.norm(state.linear_velocity) < 0.01
+
+
+def test_non_unit_quaternion_is_normalised(world):
+    world.spawn_urdf_file('r2d2', R2D2, orientation=(0.0, 0.0, 0.0, 4.0))
+    orientation = world.get_model_state('r2d2').orientation
+    np.testing.assert_allclose(np.abs(orientation), [0.0, 0.0, 0.0, 1.0], atol=1e-12)
+
+
+def test_duplicate_name_is_refused(world):
+    world.spawn_urdf_file('r2d2', R2D2)
+    with pytest.raises(WorldError, match="a model named 'r2d2' already exists"):
+        world.spawn_urdf_file('r2d2', R2D2, position=(3.0, 0.0, 0.0))
+    assert world.model_names() == ['r2d2']
+
+
+@pytest.mark.parametrize('name, message', [
+    ('', 'model name must not be empty'),
+    ('r2/d2', "must not contain '/'"),
+    ('r2 d2', 'must not contain whitespace'),
+    ('r2::d2', "must not contain '::'"),
+    ('r' * 65, 'longer than 64 characters'),
+    ('world', 'reserved for the world frame'),
+])
+def test_bad_model_names_are_refused(world, name, message):
+    with pytest.raises(WorldError, match=message):
+        world.spawn_urdf_file(name, R2D2)
+    assert world.model_names() == []
+
+
+def test_bad_poses_are_refused(world):
+    for kwargs, message in [
+            ({'position': (0.0, math.inf, 0.0)}, 'position contains NaN or infinity'),
+            ({'orientation': (0.0, 0.0, 0.0, 0.0)}, 'orientation quaternion is zero'),
+            ({'orientation': (math.nan, 0.0, 0.0, 1.0)}, 'orientation contains NaN'),
+            ({'reference_frame': 'foo'}, "unknown reference frame 'foo'"),
+            ({'namespace': 'bad name'}, 'not a valid ROS namespace')]:
+        with pytest.raises(WorldError, match=message):
+            world.spawn_urdf_file('r2d2', R2D2, **kwargs)
+    assert world.model_names() == []
+
+
+def test_model_listing_namespace_and_delete(world):
+    world.spawn_urdf_file('tinybot', TINYBOT, namespace='robots/tiny/')
+    world.spawn_urdf_file('r2d2', R2D2, position=(2.0, 0.0, 0.0))
+    assert world.model_names() == ['tinybot', 'r2d2']
+    assert world.has_model('r2d2') and not world.has_model('c3po')
+    assert world.namespace('tinybot') == '/robots/tiny' and world.namespace('r2d2') == ''
+    assert world.diff_drive_models() == ['tinybot']
+    world.delete_model('r2d2')
+    assert world.model_names() == ['tinybot']
+    with pytest.raises(WorldError, match="no model named 'r2d2'"):
+        world.delete_model('r2d2')
+    assert world.model.nbody == 1 + 5
+
+
+def test_reference_frames(world):
+    world.spawn_urdf_file('tinybot', TINYBOT, position=(1.0, 0.0, 0.0),
+                          orientation=yaw_quaternion(math.pi / 2.0))
+    world.spawn_urdf_file('r2d2', R2D2, position=(1.0, 0.0, 0.0), reference_frame='tinybot')
+    in_world = world.get_model_state('r2d2', 'world')
+    np.testing.assert_allclose(in_world.position, [1.0, 1.0, 0.0], atol=1e-9)
+    assert heading(in_world.orientation) == pytest.approx(math.pi / 2.0)
+    in_tinybot = world.get_model_state('r2d2', 'tinybot')
+    np.testing.assert_allclose(in_tinybot.position, [1.0, 0.0, 0.0], atol=1e-9)
+    np.testing.assert_allclose(in_tinybot.orientation, [1.0, 0.0, 0.0, 0.0], atol=1e-9)
+    # tinybot's base_link sits on the wheel axle, 0.033 m above base_footprint.
+    in_link = world.get_model_state('r2d2', 'tinybot::base_link')
+    np.testing.assert_allclose(in_link.position, [1.0, 0.0, -0.033], atol=1e-9)
+    for frame in ('foo', 'tinybot::no_such_link', 'c3po::base_link', 'tinybot::'):
+        with pytest.raises(WorldError, match='unknown reference frame'):
+            world.get_model_state('r2d2', frame)
+    with pytest.raises(WorldError, match="no model named 'c3po'"):
+        world.get_model_state('c3po')
+
+
+def test_set_and_get_model_state(world):
+    world.spawn_urdf_file('r2d2', R2D2)
+    world.spawn_urdf_file('tinybot', TINYBOT, position=(0.0, 3.0, 0.0))
+    orientation = yaw_quaternion(0.6)
+    world.set_model_state('r2d2', position=(3.0, 4.0, 0.5), orientation=orientation,
+                          linear_velocity=(0.5, 0.0, 0.0), angular_velocity=(0.0, 0.0, 0.2))
+    state = world.get_model_state('r2d2')
+    np.testing.assert_allclose(state.position, [3.0, 4.0, 0.5])
+    np.testing.assert_allclose(state.orientation, orientation, atol=1e-12)
+    np.testing.assert_allclose(state.linear_velocity, [0.5, 0.0, 0.0], atol=1e-12)
+    np.testing.assert_allclose(state.angular_velocity, [0.0, 0.0, 0.2], atol=1e-12)
+    world.step(10)
+    assert world.get_model_state('r2d2').position[0] > 3.0
+
+    world.set_model_state('r2d2', position=(0.0, 1.0, 0.0), orientation=(1.0, 0.0, 0.0, 0.0),
+                          linear_velocity=(1.0, 0.0, 0.0), reference_frame='tinybot')
+    relative = world.get_model_state('r2d2', 'tinybot')
+    np.testing.assert_allclose(relative.position, [0.0, 1.0, 0.0], atol=1e-9)
+    np.testing.assert_allclose(relative.linear_velocity, [1.0, 0.0, 0.0], atol=1e-9)
+    np.testing.assert_allclose(world.get_model_state('r2d2').position, [0.0, 4.0, 0.0],
+                               atol=1e-3)
+
+    for kwargs, message in [
+            ({'position': (0.0, 0.0, math.nan)}, 'position contains NaN'),
+            ({'orientation': (0.0, 0.0, 0.0, 0.0)}, 'orientation quaternion is zero'),
+            ({'linear_velocity': (1e9, 0.0, 0.0)}, 'must stay below'),
+            ({'reference_frame': 'nowhere'}, "unknown reference frame 'nowhere'")]:
+        arguments = {'position': (0.0, 0.0, 0.0), 'orientation': (1.0, 0.0, 0.0, 0.0)}
+        arguments.update(kwargs)
+        with pytest.raises(WorldError, match=message):
+            world.set_model_state('r2d2', **arguments)
+    np.testing.assert_allclose(world.get_model_state('r2d2', 'tinybot').position,
+                               [0.0, 1.0, 0.0], atol=1e-9)
+
+
+def test_anchored_model_moves_only_by_pose(world):
+    post = ('<robot name="post"><link name="world"/><link name="pole"><inertial>'
+            '<mass value="1"/><inertia ixx="0.1" iyy="0.1" izz="0.1" ixy="0" ixz="0" iyz="0"/>'
+            '</inertial><collision><geometry><box size="0.1 0.1 1"/></geometry></collision>'
+            '</link><joint name="anchor" type="fixed"><parent link="world"/>'
+            '<child link="pole"/><origin xyz="0 0 0.5"/></joint></robot>')
+    world.spawn_urdf('post', post, position=(2.0, 0.0, 0.0))
+    world.step(100)
+    np.testing.assert_allclose(world.get_model_state('post').position, [2.0, 0.0, 0.5])
+    world.set_model_state('post', position=(-1.0, 0.0, 0.5), orientation=(1.0, 0.0, 0.0, 0.0))
+    world.step(10)
+    np.testing.assert_allclose(world.get_model_state('post').position, [-1.0, 0.0, 0.5])
+    with pytest.raises(WorldError, match='anchored to the world'):
+        world.set_model_state('post', position=(0.0, 0.0, 0.5), orientation=(1, 0, 0, 0),
+                              linear_velocity=(1.0, 0.0, 0.0))
+    world.reset_world()
+    np.testing.assert_allclose(world.get_model_state('post').position, [2.0, 0.0, 0.5])
+
+
+@pytest.mark.parametrize('reset, keeps_time', [('reset_world', True),
+                                               ('reset_simulation', False)])
+def test_resets_put_models_back_at_rest(tinybot_world, reset, keeps_time):
+    world = tinybot_world
+    world.spawn_urdf_file('r2d2', R2D2, position=(-2.0, 1.0, 1.0), orientation=FACING_MINUS_Y)
+    drive([world], 0.2, 0.5, 1.0)
+    time_before = world.time
+    getattr(world, reset)()
+    assert world.model_names() == ['tinybot', 'r2d2']
+    assert world.time == pytest.approx(time_before if keeps_time else 0.0)
+    r2d2 = world.get_model_state('r2d2')
+    np.testing.assert_allclose(r2d2.position, [-2.0, 1.0, 1.0], atol=1e-12)
+    assert heading(r2d2.orientation) == pytest.approx(-math.pi / 2.0, abs=1e-3)
+    tinybot = world.get_model_state('tinybot')
+    np.testing.assert_allclose(tinybot.position, [0.0, 0.0, 0.0], atol=1e-12)
+    assert not np.any(world.data.qvel) and not np.any(world.data.act)
+    odometry = world.odometry('tinybot')
+    assert not np.any(odometry.position) and not np.any(odometry.linear_velocity)
+    # The drive command was cleared: tinybot stays where it is.
+    world.step(250)
+    assert np.linalg.norm(world.get_model_state('tinybot').position[:2]) < 1e-3
+
+
+def test_pause_stops_time(tinybot_world):
+    world = tinybot_world
+    world.command_velocity('tinybot', 0.2, 0.0)
+    world.pause()
+    assert world.paused
+    time, position = world.time, world.get_model_state('tinybot').position
+    assert world.step(100) == 0
+    assert world.time == time
+    np.testing.assert_array_equal(world.get_model_state('tinybot').position, position)
+    world.unpause()
+    assert world.step(100) == 100
+    assert world.time == pytest.approx(time + 100 * world.timestep)
+
+
+@pytest.mark.parametrize('linear_x, angular_z, seconds, tolerance', [
+    (0.0, 0.5, 2.0, 0.015),
+    (0.2, 0.0, 2.0, 0.015),
+    (0.0, 0.1, 1.0, 0.02),
+    (0.0, 1.5, 5.0, 0.02),
+])
+@pytest.mark.parametrize('odometry_source', ['0', '1'])
+def test_tinybot_turns_and_drives_as_commanded(linear_x, angular_z, seconds, tolerance,
+                                               odometry_source):
+    urdf = read(TINYBOT).replace('<odometry_source>0</odometry_source>',
+                                 f'<odometry_source>{odometry_source}</odometry_source>')
+    world = World()
+    world.spawn_urdf('tinybot', urdf)
+    world.step(250)
+    start = world.get_model_state('tinybot')
+    turned, last_heading = 0.0, heading(start.orientation)
+    odometry_turned, last_odometry_heading = 0.0, heading(world.odometry('tinybot').orientation)
+
+    def track():
+        nonlocal turned, last_heading, odometry_turned, last_odometry_heading
+        current = heading(world.get_model_state('tinybot').orientation)
+        turned += (current - last_heading + math.pi) % (2.0 * math.pi) - math.pi
+        last_heading = current
+        current = heading(world.odometry('tinybot').orientation)
+        odometry_turned += (current - last_odometry_heading + math.pi) % (2.0 * math.pi) - math.pi
+        last_odometry_heading = current
+
+    for _ in range(round(seconds / 0.02)):
+        world.command_velocity('tinybot', linear_x, angular_z)
+        world.step(10)
+        track()
+    world.command_velocity('tinybot', 0.0, 0.0)
+    for _ in range(25):
+        world.step(10)
+        track()
+
+    end = world.get_model_state('tinybot')
+    travelled = np.linalg.norm(end.position[:2] - start.position[:2])
+    odometry_travelled = np.linalg.norm(world.odometry('tinybot').position[:2])
+    expected_turn, expected_travel = angular_z * seconds, linear_x * seconds
+    scale_turn, scale_travel = max(abs(expected_turn), 1.0), max(expected_travel, 0.1)
+    assert abs(turned - expected_turn) <= tolerance * scale_turn
+    assert abs(travelled - expected_travel) <= tolerance * scale_travel
+    assert abs(odometry_turned - turned) <= tolerance * scale_turn
+    assert abs(odometry_travelled - travelled) <= tolerance * scale_travel
+
+
+def test_command_times_out_and_the_wheels_stop(tinybot_world):
+    world = tinybot_world
+    world.command_velocity('tinybot', 0.2, 0.0)
+    world.step(200)
+    assert world.odometry('tinybot').linear_velocity[0] == pytest.approx(0.2, rel=0.02)
+    # The command lapses at 0.5 s; the wheels then ramp down at 1 m/s^2 for 0.2 s.
+    world.step(250)
+    _, _, wheel_speeds = world.joint_state('tinybot')
+    np.testing.assert_allclose(wheel_speeds, 0.0, atol=1e-3)
+    assert np.linalg.norm(world.get_model_state('tinybot').linear_velocity) < 1e-3
+    position = world.get_model_state('tinybot').position
+    world.step(500)
+    np.testing.assert_allclose(world.get_model_state('tinybot').position, position, atol=1e-4)
+
+
+def test_diff_drive_requests_are_checked(world):
+    world.spawn_urdf_file('r2d2', R2D2)
+    with pytest.raises(WorldError, match="model 'r2d2' has no diff drive"):
+        world.command_velocity('r2d2', 0.1, 0.0)
+    with pytest.raises(WorldError, match="no model named 'tinybot'"):
+        world.odometry('tinybot')
+    world.spawn_urdf_file('tinybot', TINYBOT, position=(2.0, 0.0, 0.0))
+    with pytest.raises(WorldError, match='linear_x is NaN'):
+        world.command_velocity('tinybot', math.nan, 0.0)
+    odometry = world.odometry('tinybot')
+    assert (odometry.odometry_frame, odometry.robot_base_frame) == ('odom', 'base_footprint')
+    names, positions, velocities = world.joint_state('tinybot')
+    assert names == ['wheel_left_joint', 'wheel_right_joint']
+    assert positions.shape == velocities.shape == (2,)
+    assert world.joint_state('r2d2')[0] == ['head_swivel']
+
+
+def test_spawn_keeps_a_driving_robot_continuous():
+    plain, busy = World(), World()
+    for world in (plain, busy):
+        world.spawn_urdf_file('tinybot', TINYBOT)
+    drive([plain, busy], 0.2, 0.4, 0.5)
+    before = tinybot_state(busy)
+    busy.spawn_urdf_file('r2d2', R2D2, position=(3.0, 3.0, 1.0))
+    np.testing.assert_array_equal(tinybot_state(busy), before)
+    drive([plain, busy], 0.2, 0.4, 1.0)
+    np.testing.assert_allclose(tinybot_state(busy), tinybot_state(plain), rtol=0, atol=1e-9)
+
+
+def test_delete_keeps_a_driving_robot_continuous():
+    plain, busy = World(), World()
+    for world in (plain, busy):
+        # R2-D2 comes first, so deleting it moves tinybot's place in the MuJoCo arrays.
+        world.spawn_urdf_file('r2d2', R2D2, position=(3.0, 3.0, 0.0))
+        world.spawn_urdf_file('tinybot', TINYBOT)
+    drive([plain, busy], 0.2, -0.4, 0.5)
+    before = tinybot_state(busy)
+    busy.delete_model('r2d2')
+    np.testing.assert_array_equal(tinybot_state(busy), before)
+    drive([plain, busy], 0.2, -0.4, 1.0)
+    np.testing.assert_allclose(tinybot_state(busy), tinybot_state(plain), rtol=0, atol=1e-9)
+
+
+REFUSED_SPAWNS = [
+    ('bad_xml', '<robot name="x"><link name="a"></robot>', 'does not parse as XML'),
+    ('nan_mass', '<robot name="x"><link name="a"><inertial><mass value="nan"/></inertial>'
+                 '</link></robot>', 'NaN'),
+    # These two pass the loader and are refused by the MuJoCo compiler, after the robot was
+    # already attached to the live spec: the world must take it out again.
+    ('lopsided', '<robot name="x"><link name="a"><inertial><mass value="1"/><inertia ixx="1" '
+                 'iyy="1" izz="3" ixy="0" ixz="0" iyz="0"/></inertial></link></robot>',
+     'does not compile: inertia must satisfy'),
+    ('massless', '<robot name="x"><link name="a"><inertial><mass value="1"/><inertia ixx="1" '
+                 'iyy="1" izz="1" ixy="0" ixz="0" iyz="0"/></inertial></link><link name="b"/>'
+                 '<joint name="j" type="continuous"><parent link="a"/><child link="b"/>'
+                 '</joint></robot>', 'does not compile: mass and inertia of moving bodies'),
+]
+
+
+def test_refused_spawns_change_nothing():
+    plain, busy = World(), World()
+    for world in (plain, busy):
+        world.spawn_urdf_file('tinybot', TINYBOT)
+    drive([plain, busy], 0.2, 0.4, 0.3)
+    model = busy.model
+    sizes = (model.nbody, model.njnt, model.ngeom, model.nu, model.nmesh)
+    qpos, qvel, act = busy.data.qpos.copy(), busy.data.qvel.copy(), busy.data.act.copy()
+    for name, urdf, message in REFUSED_SPAWNS:
+        with pytest.raises(WorldError, match=message):
+            busy.spawn_urdf(name, urdf)
+        model = busy.model
+        assert (model.nbody, model.njnt, model.ngeom, model.nu, model.nmesh) == sizes
+        np.testing.assert_array_equal(busy.data.qpos, qpos)
+        np.testing.assert_array_equal(busy.data.qvel, qvel)
+        np.testing.assert_array_equal(busy.data.act, act)
+    assert busy.model_names() == ['tinybot']
+    drive([plain, busy], 0.2, 0.4, 0.5)
+    np.testing.assert_array_equal(busy.data.qpos, plain.data.qpos)
+    # The same names can be used once the robot is sound.
+    busy.spawn_urdf_file('massless', R2D2, position=(3.0, 0.0, 0.0))
+    assert busy.model_names() == ['tinybot', 'massless']
+
+
+@pytest.mark.parametrize('poke', ['nan_velocity', 'huge_velocity', 'nan_position'])
+def test_unstable_robot_is_reset_alone(poke, tmp_path, monkeypatch, caplog):
+    monkeypatch.chdir(tmp_path)
+    plain, broken = World(), World()
+    for world in (plain, broken):
+        world.spawn_urdf_file('tinybot', TINYBOT)
+        world.spawn_urdf_file('r2d2', R2D2, position=(3.0, 3.0, 0.0))
+    drive([plain, broken], 0.2, 0.4, 0.3)
+    # Reach into the MuJoCo data behind the world's back, as a renderer or a bug could.
+    data = broken.data
+    free_joint = broken.model.body('r2d2::base_footprint').jntadr[0]
+    qvel_address = broken.model.jnt_dofadr[free_joint]
+    qpos_address = broken.model.jnt_qposadr[free_joint]
+    if poke == 'nan_velocity':
+        data.qvel[qvel_address + 2] = math.nan
+    elif poke == 'huge_velocity':
+        data.qvel[qvel_address] = 1e12
+    else:
+        data.qpos[qpos_address + 2] = math.nan
+    with caplog.at_level(logging.WARNING, logger='service_tutorial.world'):
+        drive([plain, broken], 0.2, 0.4, 0.3)
+    assert np.isfinite(broken.data.qpos).all() and np.isfinite(broken.data.qvel).all()
+    assert "model 'r2d2'" in caplog.text and "model 'tinybot'" not in caplog.text
+    r2d2 = broken.get_model_state('r2d2')
+    np.testing.assert_allclose(r2d2.position, [3.0, 3.0, 0.0], atol=0.005)
+    np.testing.assert_allclose(tinybot_state(broken), tinybot_state(plain), rtol=0, atol=1e-9)
+    assert broken.model_names() == ['tinybot', 'r2d2']
+    assert not os.path.exists(tmp_path / 'MUJOCO_LOG.TXT')
+
+
+def test_mujoco_warnings_go_to_logging(tmp_path, monkeypatch, caplog):
+    monkeypatch.chdir(tmp_path)
+    world = World()
+    world.spawn_urdf_file('r2d2', R2D2)
+    world.data.qvel[0] = math.inf
+    with caplog.at_level(logging.WARNING, logger='service_tutorial.world'):
+        world.step(5)
+    assert 'MuJoCo: Nan, Inf or huge value' in caplog.text
+    assert os.listdir(tmp_path) == []
+
+
+def test_step_count_and_world_settings():
+    world = World(timestep=0.001, gravity=(0.0, 0.0, -1.62))
+    assert world.timestep == 0.001
+    np.testing.assert_allclose(world.model.opt.gravity, [0.0, 0.0, -1.62])
+    assert world.step(7) == 7 and world.time == pytest.approx(0.007)
+    with pytest.raises(WorldError, match='step count must not be negative'):
+        world.step(-1)
+    with pytest.raises(WorldError, match='timestep must be positive'):
+        World(timestep=0.0)
+
+
+def test_spawning_takes_milliseconds_and_stepping_costs_what_mujoco_costs(tinybot_world):
+    world = tinybot_world
+    durations = []
+    for index in range(5):
+        start = time.perf_counter()
+        world.spawn_urdf_file(f'r2d2_{index}', R2D2, position=(2.0 + index, 0.0, 0.0))
+        durations.append(time.perf_counter() - start)
+    assert sorted(durations)[2] < 0.05
+
+    model, data = world.model, world.data
+    raw = mujoco.MjData(model)
+    state = np.empty(mujoco.mj_stateSize(model, mujoco.mjtState.mjSTATE_INTEGRATION))
+    mujoco.mj_getState(model, data, state, mujoco.mjtState.mjSTATE_INTEGRATION)
+    mujoco.mj_setState(model, raw, state, mujoco.mjtState.mjSTATE_INTEGRATION)
+    world_best = raw_best = math.inf
+    for _ in range(5):
+        start = time.perf_counter()
+        world.step(1000)
+        world_best = min(world_best, time.perf_counter() - start)
+        start = time.perf_counter()
+        mujoco.mj_step(model, raw, 1000)
+        raw_best = min(raw_best, time.perf_counter() - start)
+    assert world_best < 1.5 * raw_best
