@@ -17,7 +17,6 @@ from nav_msgs.msg import Odometry
 import rclpy
 from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
-from rclpy.validate_namespace import validate_namespace
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState
 from srv_interfaces.srv import DeleteModel, GetModelList, GetModelState, SetModelState
@@ -25,6 +24,7 @@ from srv_interfaces.srv import SpawnModel
 from std_srvs.srv import Empty
 import yaml
 
+from service_tutorial.camera_stream import CameraStream
 from service_tutorial.world import World, WorldError
 
 PACKAGE = 'service_tutorial'
@@ -114,6 +114,7 @@ class MujocoWorld(Node):
         self._joint_state_period = 1.0 / param('joint_state_publish_rate').value
         self._next_clock = self._next_odom = self._next_joint_states = 0.0
         self.robots = {}
+        self.viewer = None
 
         self.clock_pub = self.create_publisher(Clock, '/clock', 10)
         self.spawn_srv = self.create_service(
@@ -134,11 +135,12 @@ class MujocoWorld(Node):
             GetModelState, '~/get_model_state', self.get_model_state_callback)
         self.set_state_srv = self.create_service(
             SetModelState, '~/set_model_state', self.set_model_state_callback)
+        # ~/camera/image_raw, ~/camera/camera_info (camera_enabled) and ~/save_snapshot.
+        self.camera_stream = CameraStream(self, self.world)
 
         self._spawn_start_up_models()
         if param('paused').value:
             self.world.pause()
-        self.viewer = None
         if param('gui').value:
             self._open_viewer()
 
@@ -185,7 +187,8 @@ class MujocoWorld(Node):
             self._sync_viewer()
 
     def _steps_to_next_publication(self):
-        due = min(self._next_clock, self._next_odom, self._next_joint_states)
+        due = min(self._next_clock, self._next_odom, self._next_joint_states,
+                  self.camera_stream.next_due)
         return max(1, math.ceil((due - self.world.time) / self.world.timestep - 1e-9))
 
     def publish_due(self):
@@ -201,6 +204,7 @@ class MujocoWorld(Node):
             self._next_joint_states = now + self._joint_state_period
             for robot in self.robots.values():
                 self.publish_joint_states(robot, now)
+        self.camera_stream.publish_due(now)
 
     def publish_clock(self):
         """Publish the simulation time on /clock."""
@@ -262,21 +266,12 @@ class MujocoWorld(Node):
     def spawn_model(self, name, urdf, namespace, position, orientation, reference_frame,
                     base_dir=None):
         """Add a model to the world and give its diff drive, if any, its topics."""
-        namespace = namespace.strip()
-        if namespace:
-            if not namespace.startswith('/'):
-                namespace = '/' + namespace
-            try:
-                validate_namespace(namespace)
-            except Exception as error:  # rclpy raises its own InvalidNamespaceException
-                raise WorldError(f'robot_namespace {namespace!r} is not a valid ROS namespace: '
-                                 f'{getattr(error, "error_msg", error)}') from None
         self.world.spawn_urdf(name, urdf, position=position, orientation=orientation,
                               reference_frame=reference_frame, namespace=namespace,
                               base_dir=base_dir)
         if name in self.world.diff_drive_models():
             try:
-                self.robots[name] = RobotTopics(self, name, namespace)
+                self.robots[name] = RobotTopics(self, name, self.world.namespace(name))
             except Exception:
                 self.world.delete_model(name)
                 raise
@@ -403,6 +398,7 @@ class MujocoWorld(Node):
         if self.viewer is not None:
             self.viewer.close()
             self.viewer = None
+        self.camera_stream.close()
         return super().destroy_node()
 
 
