@@ -19,13 +19,12 @@ from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState
+from service_tutorial.camera_stream import CameraStream
+from service_tutorial.world import World, WorldError
 from srv_interfaces.srv import DeleteModel, GetModelList, GetModelState, SetModelState
 from srv_interfaces.srv import SpawnModel
 from std_srvs.srv import Empty
 import yaml
-
-from service_tutorial.camera_stream import CameraStream
-from service_tutorial.world import World, WorldError
 
 PACKAGE = 'service_tutorial'
 # Longest stretch of wall time one timer tick may spend stepping before it lets services run.
@@ -171,7 +170,8 @@ class MujocoWorld(Node):
                 world.step(self._steps_to_next_publication())
                 self.publish_due()
         else:
-            target = self._sim_anchor + (time.monotonic() - self._wall_anchor) * self.real_time_factor
+            wall_elapsed = time.monotonic() - self._wall_anchor
+            target = self._sim_anchor + wall_elapsed * self.real_time_factor
             behind = int((target - world.time) / world.timestep)
             if behind > 0.1 / world.timestep:
                 # More than 100 ms behind: the machine cannot keep up; do not try to catch up.
@@ -419,4 +419,3 @@ def main(args=None):
 
 if __name__ == '__main__':
     main()
-

@@ -11,12 +11,11 @@ import pytest
 from rclpy.parameter import Parameter
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState
+from service_tutorial.mujoco_world import MujocoWorld
+from service_tutorial.world import World
 from srv_interfaces.srv import DeleteModel, GetModelList, GetModelState, SetModelState
 from srv_interfaces.srv import SpawnModel
 from std_srvs.srv import Empty
-
-from service_tutorial.mujoco_world import MujocoWorld
-from service_tutorial.world import World
 
 pytestmark = pytest.mark.ros
 
@@ -86,13 +85,13 @@ class WorldClient:
 
 @pytest.fixture
 def fast_world(ros):
-    """The default world, free-running as fast as the machine can."""
+    """Start the default world free-running, as fast as the machine can."""
     return WorldClient(ros, real_time_factor=0.0)
 
 
 @pytest.fixture
 def real_time_world(ros):
-    """The default world in real time, for driving with cmd_vel at a human pace."""
+    """Start the default world in real time, for driving with cmd_vel at a human pace."""
     return WorldClient(ros, real_time_factor=1.0)
 
 
