@@ -1,0 +1,163 @@
+"""
+The lesson's turning service: turn tinybot at a given rate for a given time.
+
+/control_robot_angle (srv_interfaces/srv/ControlTurningMessage) publishes angular_vel on
+cmd_vel for time_duration seconds of ROS time (simulation time with use_sim_time), then a
+zero Twist, and answers success. Unlike the ROS 1 original, which busy-looped inside its
+callback, the node never blocks its executor: the service callback is a coroutine that queues
+the turn and awaits its end, while two timers carry the turn out. Requests that arrive during a
+turn wait for the turns before them (first come, first served). A zero-length turn stops the
+robot and succeeds at once when its turn comes.
+"""
+
+from collections import deque
+import math
+
+from geometry_msgs.msg import Twist
+from rcl_interfaces.msg import ParameterDescriptor
+import rclpy
+from rclpy.callback_groups import ReentrantCallbackGroup
+from rclpy.executors import ExternalShutdownException
+from rclpy.node import Node
+from rclpy.task import Future
+from srv_interfaces.srv import ControlTurningMessage
+
+
+class Turn:
+    """One accepted request: its command, when it started, and the future its caller awaits."""
+
+    def __init__(self, time_duration, angular_vel):
+        self.time_duration = time_duration
+        self.command = Twist()
+        self.command.angular.z = angular_vel
+        self.start = None
+        self.done = Future()
+
+
+class RobotTurningServer(Node):
+    """Serves /control_robot_angle by publishing cmd_vel for the requested time."""
+
+    def __init__(self, **kwargs):
+        super().__init__('robot_turning_server', **kwargs)
+        self.declare_parameter('publish_rate', 20.0, ParameterDescriptor(
+            description='how often cmd_vel is repeated during a turn, in Hz', read_only=True))
+        self.declare_parameter('max_angular_vel', 1.5707, ParameterDescriptor(
+            description='fastest turn accepted, in rad/s (either direction)'))
+        self.declare_parameter('max_duration', 60, ParameterDescriptor(
+            description='longest turn accepted, in seconds'))
+        publish_rate = self.get_parameter('publish_rate').value
+        if not publish_rate > 0.0:
+            raise ValueError(f'publish_rate must be above 0 Hz, got {publish_rate}')
+
+        self.turns = deque()
+        self.cmd_vel_pub = self.create_publisher(Twist, 'cmd_vel', 10)
+        # Reentrant: while one request's coroutine awaits the end of its turn, the executor
+        # must be free to take the next request and queue it.
+        self.turning_srv = self.create_service(
+            ControlTurningMessage, 'control_robot_angle', self.control_robot_angle_callback,
+            callback_group=ReentrantCallbackGroup())
+        # Both timers run on the node's clock, so on simulation time they follow /clock.
+        # They idle (cancelled) until a turn starts.
+        self.publish_timer = self.create_timer(
+            1.0 / publish_rate, self.publish_callback, autostart=False)
+        self.stop_timer = self.create_timer(1.0, self.stop_callback, autostart=False)
+        self.get_logger().info('==== Robot Turning Server Started ====')
+
+    async def control_robot_angle_callback(self, request, response):
+        """Queue a valid turn and answer once it is done; refuse an invalid one at once."""
+        refusal = self.refusal(request)
+        if refusal is not None:
+            self.get_logger().warning(f'refused: {refusal}')
+            response.success = False
+            return response
+        turn = Turn(request.time_duration, request.angular_vel)
+        self.turns.append(turn)
+        if len(self.turns) == 1:
+            self.start_turn(turn)
+        else:
+            self.get_logger().info(
+                f'queued {request.angular_vel} rad/s for {request.time_duration} s '
+                f'behind {len(self.turns) - 1} turn(s)')
+        response.success = await turn.done
+        return response
+
+    def refusal(self, request):
+        """Return why a request cannot be carried out, or None if it can."""
+        max_angular_vel = self.get_parameter('max_angular_vel').value
+        max_duration = self.get_parameter('max_duration').value
+        if not math.isfinite(request.angular_vel):
+            return f'angular_vel {request.angular_vel} is not a finite number'
+        if abs(request.angular_vel) > max_angular_vel:
+            return (f'angular_vel {request.angular_vel} rad/s is faster than '
+                    f'max_angular_vel {max_angular_vel} rad/s')
+        if request.time_duration > max_duration:
+            return (f'time_duration {request.time_duration} s is longer than '
+                    f'max_duration {max_duration} s')
+        return None
+
+    def start_turn(self, turn):
+        """Publish the turn's command now and schedule its stop exactly time_duration later."""
+        if turn.time_duration == 0:
+            self.finish_turn()
+            return
+        self.publish_timer.reset()
+        now = self.get_clock().now()
+        if now.nanoseconds == 0:
+            # Simulation time has not arrived on /clock yet: start on the first timer tick.
+            return
+        self.cmd_vel_pub.publish(turn.command)
+        turn.start = now
+        self.stop_timer.timer_period_ns = turn.time_duration * 1_000_000_000
+        self.stop_timer.reset()
+        self.get_logger().info(
+            f'Robot Turning... {turn.command.angular.z} rad/s for {turn.time_duration} s')
+
+    def publish_callback(self):
+        """Repeat the current turn's command so the robot keeps turning."""
+        if not self.turns:
+            return
+        turn = self.turns[0]
+        if turn.start is None:
+            self.start_turn(turn)
+        else:
+            self.cmd_vel_pub.publish(turn.command)
+
+    def stop_callback(self):
+        """End the current turn: the timer fires when its time_duration has passed."""
+        self.stop_timer.cancel()
+        elapsed = (self.get_clock().now() - self.turns[0].start).nanoseconds / 1e9
+        self.get_logger().info(f'Done ... after {elapsed:.3f} s')
+        self.finish_turn()
+
+    def finish_turn(self):
+        """Stop the robot, answer the current turn's caller, and start the next turn."""
+        self.publish_timer.cancel()
+        self.cmd_vel_pub.publish(Twist())
+        self.turns.popleft().done.set_result(True)
+        if self.turns:
+            self.start_turn(self.turns[0])
+
+    def destroy_node(self):
+        """Stop the robot if the node goes away in the middle of a turn."""
+        if self.turns and self.context.ok():
+            self.cmd_vel_pub.publish(Twist())
+        return super().destroy_node()
+
+
+def main(args=None):
+    """Run the turning server until Ctrl-C."""
+    rclpy.init(args=args)
+    node = None
+    try:
+        node = RobotTurningServer()
+        rclpy.spin(node)
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+    finally:
+        if node is not None:
+            node.destroy_node()
+        rclpy.try_shutdown()
+
+
+if __name__ == '__main__':
+    main()

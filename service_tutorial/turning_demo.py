@@ -1,0 +1,333 @@
+"""
+The lesson from start to finish against a headless MuJoCo world: what scripts/demo runs.
+
+It starts mujoco_world and robot_turning_server (on the world's simulation time) as child
+processes, then walks through the lesson's services one step at a time, printing what each
+did: spawn R2-D2, turn tinybot through /control_robot_angle and measure how far it really
+turned, delete R2-D2, reset the simulation. The children are stopped at the end whatever
+happened; the exit status is 0 only if every step succeeded.
+"""
+
+import argparse
+import ctypes
+import math
+import os
+import signal
+import subprocess
+import sys
+import tempfile
+import threading
+import time
+
+from ament_index_python.packages import get_package_prefix, PackageNotFoundError
+import rclpy
+from rclpy.executors import SingleThreadedExecutor
+from rclpy.node import Node
+from rclpy.signals import SignalHandlerOptions
+from rclpy.utilities import remove_ros_args
+from service_tutorial import model_services
+from service_tutorial.model_services import response_text
+from service_tutorial.recording import TurnRecorder
+from srv_interfaces.srv import ControlTurningMessage, DeleteModel, GetModelState, SpawnModel
+from std_srvs.srv import Empty
+
+PACKAGE = 'service_tutorial'
+ROBOT = 'tinybot'
+# The nodes the demo needs, as (executable, ROS arguments). The world is the source of
+# simulation time (it publishes /clock); the turning server follows it.
+CHILDREN = (
+    ('mujoco_world', ['-p', 'gui:=false', '-p', 'use_sim_time:=true']),
+    ('robot_turning_server', ['-p', 'use_sim_time:=true']),
+)
+SERVICES = (
+    (SpawnModel, model_services.SPAWN_MODEL_SERVICE),
+    (DeleteModel, model_services.DELETE_MODEL_SERVICE),
+    (Empty, model_services.RESET_SIMULATION_SERVICE),
+    (GetModelState, model_services.GET_MODEL_STATE_SERVICE),
+    (ControlTurningMessage, 'control_robot_angle'),
+)
+# With --record: the world's camera, 10 frames per simulated second (see config/world.yaml).
+RECORD_CAMERA_ARGS = ['-p', 'camera_enabled:=true', '-p', 'camera_rate:=10.0',
+                      '-p', 'camera_width:=480', '-p', 'camera_height:=360']
+# How often tinybot's heading is sampled during a turn, in s: often enough to unwrap it.
+HEADING_SAMPLE_PERIOD = 0.1
+# Below this turning rate, in rad/s, tinybot counts as stopped.
+AT_REST = 1e-3
+# Seconds a child gets to stop after SIGINT before it is killed.
+STOP_TIMEOUT = 5.0
+
+
+class DemoError(RuntimeError):
+    """A step of the demo failed; the message says which and why."""
+
+
+def say(text=''):
+    """Print a line of the demo's story at once, even when stdout is a pipe."""
+    print(text, flush=True)
+
+
+def _stop_with_parent():
+    """Have Linux send SIGTERM to this child if the demo dies without stopping it."""
+    pr_set_pdeathsig = 1
+    ctypes.CDLL(None, use_errno=True).prctl(pr_set_pdeathsig, signal.SIGTERM)
+
+
+class Child:
+    """A node run as a child process, its output going to a log file of its own."""
+
+    def __init__(self, executable, ros_args, log_dir):
+        self.name = executable
+        self.log_path = os.path.join(log_dir, executable + '.log')
+        command = executable_command(executable) + ['--ros-args'] + ros_args
+        with open(self.log_path, 'w') as log_file:
+            self.process = subprocess.Popen(
+                command, stdin=subprocess.DEVNULL, stdout=log_file, stderr=subprocess.STDOUT,
+                preexec_fn=_stop_with_parent if sys.platform.startswith('linux') else None)
+
+    def check_running(self):
+        """Raise DemoError, with the end of the child's log, if the child has exited."""
+        status = self.process.poll()
+        if status is not None:
+            with open(self.log_path) as log_file:
+                tail = ''.join(log_file.readlines()[-15:])
+            raise DemoError(f'{self.name} exited with status {status}; the end of '
+                            f'{self.log_path}:\n{tail}')
+
+    def stop(self):
+        """Stop the child as Ctrl-C would, and kill it if it does not stop in time."""
+        if self.process.poll() is None:
+            self.process.send_signal(signal.SIGINT)
+            try:
+                self.process.wait(STOP_TIMEOUT)
+            except subprocess.TimeoutExpired:
+                self.process.kill()
+                self.process.wait()
+                return f'{self.name} killed (it ignored SIGINT for {STOP_TIMEOUT} s)'
+        return f'{self.name} stopped (exit status {self.process.returncode})'
+
+
+def executable_command(executable):
+    """Return the command that runs one of this package's executables."""
+    try:
+        path = os.path.join(get_package_prefix(PACKAGE), 'lib', PACKAGE, executable)
+    except PackageNotFoundError:
+        path = None
+    if path is not None and os.access(path, os.X_OK):
+        return [path]
+    return [sys.executable, '-m', f'{PACKAGE}.{executable}']
+
+
+def wait_for_services(node, children, timeout):
+    """Wait until every service the demo uses is up; fail early if a child exits."""
+    clients = [node.create_client(srv_type, name) for srv_type, name in SERVICES]
+    deadline = time.monotonic() + timeout
+    try:
+        while True:
+            missing = [client.service_name for client in clients
+                       if not client.service_is_ready()]
+            if not missing:
+                return
+            for child in children:
+                child.check_running()
+            if time.monotonic() > deadline:
+                raise DemoError(f'after {timeout} s still no {", ".join(missing)}')
+            time.sleep(0.1)
+    finally:
+        for client in clients:
+            node.destroy_client(client)
+
+
+def robot_state(node, state_client, model_name=ROBOT):
+    """Return a model's state in the world, from /mujoco/get_model_state (ground truth)."""
+    request = GetModelState.Request()
+    request.model_name = model_name
+    state = model_services.call(node, state_client, request)
+    if not state.success:
+        raise DemoError(f'cannot read the state of {model_name}: {state.status_message}')
+    return state
+
+
+def spawn_r2d2(node):
+    """Spawn R2-D2 the lesson's way and show where it landed."""
+    response = model_services.spawn_model(
+        node, 'r2d2', model_file=model_services.model_path('r2d2.urdf'),
+        pose=model_services.make_pose(-2.0, 1.0, 1.0, quaternion=(0.0, 0.0, -0.707, 0.707)),
+        reference_frame='world')
+    say(indent(response_text(response)))
+    if not response.success:
+        raise DemoError(f'R2-D2 was not spawned: {response.status_message}')
+    state = model_services.get_model_state(node, 'r2d2')
+    position = state.pose.position
+    say(indent(f'r2d2 is at x {position.x:.2f} m, y {position.y:.2f} m, z {position.z:.2f} m, '
+               f'heading {math.degrees(model_services.yaw_of(state.pose)):.1f} deg'))
+
+
+def turn_robot(node, time_duration, angular_vel):
+    """Ask /control_robot_angle for a turn and measure how far tinybot really turned."""
+    turning_client = node.create_client(ControlTurningMessage, 'control_robot_angle')
+    state_client = node.create_client(GetModelState, model_services.GET_MODEL_STATE_SERVICE)
+    try:
+        request = ControlTurningMessage.Request()
+        request.time_duration = time_duration
+        request.angular_vel = angular_vel
+        last = model_services.yaw_of(robot_state(node, state_client).pose)
+        turned = 0.0
+        future = turning_client.call_async(request)
+        answered = threading.Event()
+        future.add_done_callback(lambda _: answered.set())
+        deadline = time.monotonic() + time_duration + 10.0
+        # Sum the heading's changes until the answer has come and tinybot has stopped: a
+        # heading alone is only known modulo 2 pi, a sum of small changes is not.
+        while True:
+            answered.wait(HEADING_SAMPLE_PERIOD)
+            state = robot_state(node, state_client)
+            heading = model_services.yaw_of(state.pose)
+            turned += math.remainder(heading - last, math.tau)
+            last = heading
+            if answered.is_set() and abs(state.twist.angular.z) < AT_REST:
+                break
+            if time.monotonic() > deadline:
+                raise DemoError(f'{turning_client.service_name} did not answer, or tinybot '
+                                f'did not stop, within {time_duration + 10.0:.0f} s')
+    finally:
+        node.destroy_client(turning_client)
+        node.destroy_client(state_client)
+    response = future.result()
+    say(indent(response_text(response)))
+    if not response.success:
+        raise DemoError('the turning server refused the request (its log says why)')
+    commanded = time_duration * angular_vel
+    error = '' if commanded == 0.0 else f', {100.0 * (turned - commanded) / commanded:+.1f} %'
+    say(indent(f'commanded {commanded:.3f} rad, tinybot turned {turned:.3f} rad{error}'))
+    return turned
+
+
+def delete_r2d2(node):
+    """Delete R2-D2, as `rosservice call /gazebo/delete_model` did in the lesson."""
+    response = model_services.delete_model(node, 'r2d2')
+    say(indent(response_text(response)))
+    if not response.success:
+        raise DemoError(f'R2-D2 was not deleted: {response.status_message}')
+
+
+def reset(node):
+    """Reset the simulation and show tinybot back at its start heading."""
+    model_services.reset_simulation(node)
+    state = model_services.get_model_state(node, ROBOT)
+    stamp = state.header.stamp
+    say(indent(f'simulation time {stamp.sec + stamp.nanosec * 1e-9:.2f} s, '
+               f'tinybot heading {model_services.yaw_of(state.pose):.3f} rad'))
+
+
+def lesson_steps(options):
+    """Return the demo's steps in order, as (title, function taking the demo's node)."""
+    duration, velocity = options.duration, options.velocity
+    return [
+        ("spawn R2-D2 the lesson's way: /mujoco/spawn_urdf_model", spawn_r2d2),
+        (f'turn tinybot: /control_robot_angle, {duration} s at {velocity} rad/s',
+         lambda node: turn_robot(node, duration, velocity)),
+        ('delete R2-D2: /mujoco/delete_model', delete_r2d2),
+        ('reset the simulation: /mujoco/reset_simulation', reset),
+    ]
+
+
+def run_lesson(node, steps, children):
+    """Run the steps one after the other, printing each as it starts."""
+    for number, (title, step) in enumerate(steps, start=1):
+        for child in children:
+            child.check_running()
+        say(f'[{number}/{len(steps)}] {title}')
+        step(node)
+
+
+def save_recording(recorder, directory):
+    """Stop recording, write turning.gif and trajectory.svg into directory, print their paths."""
+    paths = recorder.save(directory)
+    if not paths:
+        raise DemoError('nothing was recorded: no camera image and no odometry arrived')
+    for path in paths:
+        say(indent(f'wrote {os.path.abspath(path)}'))
+
+
+def indent(text):
+    """Indent every line of a step's output under its title."""
+    return '\n'.join('      ' + line for line in text.splitlines())
+
+
+def parse_arguments(argv):
+    """Read the command line (ROS arguments already removed)."""
+    parser = argparse.ArgumentParser(
+        prog='turning_demo',
+        description='Run the MuJoCo world and the turning server, then walk through the '
+                    "lesson's services step by step.")
+    parser.add_argument('--duration', type=int, default=2,
+                        help='turning time in whole seconds (default: %(default)s)')
+    parser.add_argument('--velocity', type=float, default=0.5,
+                        help='turning rate in rad/s (default: %(default)s)')
+    parser.add_argument('--log-dir',
+                        help="folder for the children's logs (default: a new temporary one)")
+    parser.add_argument('--startup-timeout', type=float, default=30.0,
+                        help='seconds to wait for the services (default: %(default)s)')
+    parser.add_argument('--record', metavar='DIR',
+                        help="film R2-D2 falling and tinybot turning with the world's camera; "
+                             'write DIR/turning.gif and DIR/trajectory.svg')
+    options = parser.parse_args(argv)
+    if options.duration < 0:
+        parser.error(f'--duration must be 0 or more, got {options.duration}')
+    return options
+
+
+def main(args=None):
+    """Run the demo; exit status 0 if every step succeeded."""
+    options = parse_arguments(remove_ros_args(sys.argv if args is None else args)[1:])
+    log_dir = options.log_dir or tempfile.mkdtemp(prefix='turning_demo-')
+    os.makedirs(log_dir, exist_ok=True)
+    # Ctrl-C and SIGTERM raise KeyboardInterrupt here, so the children are always stopped.
+    signal.signal(signal.SIGTERM, signal.default_int_handler)
+    children = []
+    node = executor = None
+    status = 1
+    try:
+        for executable, ros_args in CHILDREN:
+            if options.record and executable == 'mujoco_world':
+                ros_args = ros_args + RECORD_CAMERA_ARGS
+            children.append(Child(executable, ros_args, log_dir))
+        say(f'started {", ".join(f"{c.name} (pid {c.process.pid})" for c in children)}; '
+            f'their logs are in {log_dir}')
+        # The demo's node spins in a thread of its own while the steps below wait for answers.
+        rclpy.init(args=args, signal_handler_options=SignalHandlerOptions.NO)
+        node = Node('turning_demo')
+        executor = SingleThreadedExecutor()
+        executor.add_node(node)
+        threading.Thread(target=executor.spin, daemon=True).start()
+        started = time.monotonic()
+        wait_for_services(node, children, options.startup_timeout)
+        say(f'services up after {time.monotonic() - started:.1f} s')
+        steps = lesson_steps(options)
+        if options.record:
+            # Film from before R2-D2 appears until tinybot has turned, then save.
+            recorder = TurnRecorder(node)
+            if not recorder.wait_for_frame(options.startup_timeout):
+                raise DemoError('--record: no image from /mujoco/camera/image_raw')
+            steps.insert(2, (f'save the recording into {options.record}',
+                             lambda node: save_recording(recorder, options.record)))
+        run_lesson(node, steps, children)
+        status = 0
+    except (DemoError, TimeoutError) as error:
+        print(f'turning_demo: failed: {error}', file=sys.stderr, flush=True)
+    except KeyboardInterrupt:
+        say('turning_demo: interrupted')
+    finally:
+        if executor is not None:
+            executor.shutdown()
+        if node is not None:
+            node.destroy_node()
+        rclpy.try_shutdown()
+        for child in reversed(children):
+            say(child.stop())
+    say('done' if status == 0 else f'turning_demo: exit status {status}')
+    return status
+
+
+if __name__ == '__main__':
+    sys.exit(main())
