@@ -31,6 +31,7 @@ setup(
             'delete_model_client = service_tutorial.delete_model_client:main',
             'reset_simulation_client = service_tutorial.reset_simulation_client:main',
             'turning_demo = service_tutorial.turning_demo:main',
+            'save_snapshot = service_tutorial.save_snapshot:main',
         ],
     },
 )

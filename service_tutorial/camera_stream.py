@@ -54,7 +54,9 @@ class CameraStream:
         """Publish a frame and its camera_info if one is due and anyone listens."""
         if not self.enabled:
             return
-        if now < self.next_due:
+        # Half a step of slack: simulation time is a sum of steps and carries rounding errors.
+        soon = now + 0.5 * self.world.timestep
+        if soon < self.next_due:
             if now + self.period >= self.next_due:
                 return
             # Simulation time went back (reset_simulation): the next frame is due now.

@@ -15,12 +15,13 @@ from ament_index_python.packages import get_package_share_directory
 from geometry_msgs.msg import Twist
 from nav_msgs.msg import Odometry
 import rclpy
+from rclpy.clock import Clock as WallClock, ClockType
 from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState
 from service_tutorial.camera_stream import CameraStream
-from service_tutorial.world import World, WorldError
+from service_tutorial.world import MAX_WHEEL_RIM_SPEED, World, WorldError
 from srv_interfaces.srv import DeleteModel, GetModelList, GetModelState, SetModelState
 from srv_interfaces.srv import SpawnModel
 from std_srvs.srv import Empty
@@ -29,6 +30,12 @@ import yaml
 PACKAGE = 'service_tutorial'
 # Longest stretch of wall time one timer tick may spend stepping before it lets services run.
 STEP_BUDGET = 0.005
+# Free-running, a tick steps for at least this many times as long as the executor takes to come
+# back to it (that grows with the number of topics), but never longer than MAX_STEP_BUDGET.
+EXECUTOR_SHARE = 20.0
+MAX_STEP_BUDGET = 0.05
+# Free-running, /clock is published at most this often (wall s): sim-time nodes time by it.
+CLOCK_WALL_PERIOD = 0.001
 
 
 def load_default_parameters():
@@ -47,12 +54,17 @@ def resolve_model_path(model):
 
 def time_msg(seconds):
     """Convert simulation seconds to a builtin_interfaces/Time."""
-    msg = Clock().clock
-    msg.sec = int(seconds)
-    msg.nanosec = int(round((seconds - msg.sec) * 1e9))
-    if msg.nanosec >= 1_000_000_000:
-        msg.sec += 1
-        msg.nanosec -= 1_000_000_000
+    return fill_time_msg(Clock().clock, seconds)
+
+
+def fill_time_msg(msg, seconds):
+    """Write simulation seconds into a builtin_interfaces/Time and return it."""
+    sec = int(seconds)
+    nanosec = int(round((seconds - sec) * 1e9))
+    if nanosec >= 1_000_000_000:
+        sec += 1
+        nanosec -= 1_000_000_000
+    msg.sec, msg.nanosec = sec, nanosec
     return msg
 
 
@@ -86,6 +98,9 @@ class RobotTopics:
             lambda msg: node.cmd_vel_callback(model_name, msg), 10)
         self.odom_pub = node.create_publisher(Odometry, prefix + 'odom', 10)
         self.joint_states_pub = node.create_publisher(JointState, prefix + 'joint_states', 10)
+        # Filled in and published again every time: publish() copies the message.
+        self.odom_msg = Odometry()
+        self.joint_states_msg = JointState()
         self._node = node
 
     def destroy(self):
@@ -112,6 +127,14 @@ class MujocoWorld(Node):
         self._odom_period = 1.0 / param('odom_publish_rate').value
         self._joint_state_period = 1.0 / param('joint_state_publish_rate').value
         self._next_clock = self._next_odom = self._next_joint_states = 0.0
+        # Free-running, each stream is also published at most at its rate in wall time: far
+        # faster than real time, the simulation-time rates would cost more than the physics.
+        self._free_running = self.real_time_factor == 0.0
+        self._next_clock_wall = self._next_odom_wall = self._next_joint_states_wall = 0.0
+        self._step_wall_time = 1e-5  # running estimate of one physics step, in wall seconds
+        self._executor_turn = 0.0  # running estimate of the wall time between two ticks
+        self._tick_end = None
+        self._clock_msg = Clock()
         self.robots = {}
         self.viewer = None
 
@@ -147,7 +170,10 @@ class MujocoWorld(Node):
         # and the executor serves pending service calls between two turns.
         period = 0.0 if self.real_time_factor == 0.0 else 0.002
         self._anchor_real_time()
-        self.step_timer = self.create_timer(period, self.step_callback)
+        # The world is the source of /clock, so it paces itself on the steady wall clock even
+        # when use_sim_time is set (a sim-time timer would wait for its own /clock forever).
+        self.step_timer = self.create_timer(
+            period, self.step_callback, clock=WallClock(clock_type=ClockType.STEADY_TIME))
         self.publish_clock()
         self.get_logger().info(
             f'MuJoCo world ready: {", ".join(self.world.model_names()) or "no models"}, '
@@ -165,10 +191,23 @@ class MujocoWorld(Node):
         if world.paused:
             self._anchor_real_time()
         elif self.real_time_factor == 0.0:
-            deadline = time.monotonic() + STEP_BUDGET
-            while time.monotonic() < deadline:
-                world.step(self._steps_to_next_publication())
+            tick_start = time.monotonic()
+            if self._tick_end is not None:
+                # Follows the shortest recent turns: a slow service call is not overhead.
+                self._executor_turn = min(tick_start - self._tick_end,
+                                          1.05 * self._executor_turn + 1e-6)
+            deadline = tick_start + min(MAX_STEP_BUDGET,
+                                        max(STEP_BUDGET, EXECUTOR_SHARE * self._executor_turn))
+            while True:
+                start = time.monotonic()
+                if start >= deadline:
+                    break
+                steps = self._free_running_chunk(start, deadline)
+                world.step(steps)
+                self._step_wall_time += 0.5 * (
+                    (time.monotonic() - start) / steps - self._step_wall_time)
                 self.publish_due()
+            self._tick_end = time.monotonic()
         else:
             wall_elapsed = time.monotonic() - self._wall_anchor
             target = self._sim_anchor + wall_elapsed * self.real_time_factor
@@ -191,17 +230,43 @@ class MujocoWorld(Node):
                   self.camera_stream.next_due)
         return max(1, math.ceil((due - self.world.time) / self.world.timestep - 1e-9))
 
+    def _free_running_chunk(self, wall, deadline):
+        """Return the steps until a stream falls due (simulation and wall time) or deadline."""
+        world = self.world
+        per_step = max(self._step_wall_time, 1e-7)
+        steps = (deadline - wall) / per_step
+        for next_sim, next_wall in ((self._next_clock, self._next_clock_wall),
+                                    (self._next_odom, self._next_odom_wall),
+                                    (self._next_joint_states, self._next_joint_states_wall)):
+            steps = min(steps, max((next_sim - world.time) / world.timestep,
+                                   (next_wall - wall) / per_step))
+        steps = min(steps, (self.camera_stream.next_due - world.time) / world.timestep)
+        return max(1, math.ceil(steps - 1e-6))
+
+    def _wall_due(self, period):
+        """Return the wall time before which a stream just published may not publish again."""
+        return time.monotonic() + period if self._free_running else 0.0
+
     def publish_due(self):
         """Publish /clock, odometry and joint states whose time has come."""
+        for name in self.world.take_removed_models():  # they kept blowing up
+            robot = self.robots.pop(name, None)
+            if robot is not None:
+                robot.destroy()
         now = self.world.time
-        if now >= self._next_clock:
+        # Half a step of slack: simulation time is a sum of steps and carries rounding errors.
+        soon = now + 0.5 * self.world.timestep
+        wall = time.monotonic()
+        if soon >= self._next_clock and wall >= self._next_clock_wall:
             self.publish_clock()
-        if now >= self._next_odom:
+        if soon >= self._next_odom and wall >= self._next_odom_wall:
             self._next_odom = now + self._odom_period
+            self._next_odom_wall = self._wall_due(self._odom_period)
             for robot in self.robots.values():
                 self.publish_odometry(robot, now)
-        if now >= self._next_joint_states:
+        if soon >= self._next_joint_states and wall >= self._next_joint_states_wall:
             self._next_joint_states = now + self._joint_state_period
+            self._next_joint_states_wall = self._wall_due(self._joint_state_period)
             for robot in self.robots.values():
                 self.publish_joint_states(robot, now)
         self.camera_stream.publish_due(now)
@@ -210,15 +275,17 @@ class MujocoWorld(Node):
         """Publish the simulation time on /clock."""
         now = self.world.time
         self._next_clock = now + self._clock_period
-        msg = Clock()
-        msg.clock = time_msg(now)
-        self.clock_pub.publish(msg)
+        self._next_clock_wall = self._wall_due(min(self._clock_period, CLOCK_WALL_PERIOD))
+        fill_time_msg(self._clock_msg.clock, now)
+        self.clock_pub.publish(self._clock_msg)
 
     def publish_odometry(self, robot, now):
         """Publish a robot's odometry in its odometry frame (REP 105)."""
-        odometry = self.world.odometry(robot.model_name)
-        msg = Odometry()
-        msg.header.stamp = time_msg(now)
+        odometry = self.world.odometry(robot.model_name)  # integrates the encoders, always
+        if robot.odom_pub.get_subscription_count() == 0:
+            return  # nobody would receive it: skip the message, the costly part
+        msg = robot.odom_msg
+        fill_time_msg(msg.header.stamp, now)
         msg.header.frame_id = odometry.odometry_frame
         msg.child_frame_id = odometry.robot_base_frame
         fill_pose_msg(msg.pose.pose, odometry.position, odometry.orientation)
@@ -227,21 +294,30 @@ class MujocoWorld(Node):
 
     def publish_joint_states(self, robot, now):
         """Publish the positions and velocities of a robot's moving joints."""
+        if robot.joint_states_pub.get_subscription_count() == 0:
+            return
         names, positions, velocities = self.world.joint_state(robot.model_name)
-        msg = JointState()
-        msg.header.stamp = time_msg(now)
-        msg.name = list(names)
-        msg.position = [float(v) for v in positions]
-        msg.velocity = [float(v) for v in velocities]
+        msg = robot.joint_states_msg
+        fill_time_msg(msg.header.stamp, now)
+        msg.name = names
+        msg.position = positions.tolist()
+        msg.velocity = velocities.tolist()
         robot.joint_states_pub.publish(msg)
 
     def cmd_vel_callback(self, model_name, msg):
         """Hand a robot's velocity command to the world; the next steps apply it."""
         try:
-            self.world.command_velocity(model_name, msg.linear.x, msg.angular.z)
+            applied = self.world.command_velocity(model_name, msg.linear.x, msg.angular.z)
         except WorldError as error:
             self.get_logger().warning(
                 f'ignored cmd_vel for {model_name}: {error}', throttle_duration_sec=1.0)
+            return
+        if applied != (msg.linear.x, msg.angular.z):
+            self.get_logger().warning(
+                f'cmd_vel for {model_name} (linear.x {msg.linear.x}, angular.z '
+                f'{msg.angular.z}) turns a wheel faster than {MAX_WHEEL_RIM_SPEED} m/s; scaled '
+                f'down to linear.x {applied[0]:.4g}, angular.z {applied[1]:.4g}',
+                throttle_duration_sec=1.0)
 
     # --- model services -----------------------------------------------------------------------
 
@@ -362,6 +438,7 @@ class MujocoWorld(Node):
     def _after_reset(self):
         self._anchor_real_time()
         self._next_odom = self._next_joint_states = self.world.time
+        self._next_odom_wall = self._next_joint_states_wall = 0.0
         self.publish_clock()
         self.publish_due()
 

@@ -9,6 +9,7 @@ memory and the GIF still plays at the speed of the simulation.
 
 import math
 import os
+import time
 
 from nav_msgs.msg import Odometry
 import numpy as np
@@ -91,6 +92,13 @@ class TurnRecorder:
         pose = msg.pose.pose
         self.odometry.append((seconds(msg.header.stamp), pose.position.x, pose.position.y,
                               yaw_of(pose.orientation)))
+
+    def wait_for_frame(self, timeout):
+        """Wait until a first frame is kept, while another thread spins; return if it was."""
+        deadline = time.monotonic() + timeout
+        while not self.frames and time.monotonic() < deadline:
+            time.sleep(0.05)
+        return bool(self.frames)
 
     def stop(self):
         """Stop listening; what was recorded stays."""

@@ -254,29 +254,43 @@ def _check_structure(root):
                 raise UrdfError(f"link '{link.get('name')}' has an empty <geometry>")
 
 
-# Attributes that hold numbers, by element.
+# Attributes that hold numbers, by element, and how many numbers each may hold.
 _NUMERIC_ATTRIBUTES = {
-    'origin': ('xyz', 'rpy'), 'axis': ('xyz',), 'dynamics': ('damping', 'friction'),
-    'limit': ('lower', 'upper', 'effort', 'velocity'), 'mass': ('value',),
-    'inertia': ('ixx', 'ixy', 'ixz', 'iyy', 'iyz', 'izz'), 'box': ('size',),
-    'cylinder': ('radius', 'length'), 'sphere': ('radius',), 'mesh': ('scale',),
-    'color': ('rgba',)}
+    'origin': {'xyz': (3,), 'rpy': (3,)}, 'axis': {'xyz': (3,)},
+    'dynamics': {'damping': (1,), 'friction': (1,)},
+    'limit': {'lower': (1,), 'upper': (1,), 'effort': (1,), 'velocity': (1,)},
+    'mass': {'value': (1,)},
+    'inertia': {key: (1,) for key in ('ixx', 'ixy', 'ixz', 'iyy', 'iyz', 'izz')},
+    'box': {'size': (3,)}, 'cylinder': {'radius': (1,), 'length': (1,)},
+    'sphere': {'radius': (1,)}, 'mesh': {'scale': (1, 3)}, 'color': {'rgba': (4,)}}
 
 
 def _check_numbers(element, what):
     for child in element.iter(*_NUMERIC_ATTRIBUTES):
-        for key in _NUMERIC_ATTRIBUTES[child.tag]:
-            if child.get(key) is not None:
-                _parse_numbers(child.get(key), f'{what} <{child.tag} {key}>')
+        for key, counts in _NUMERIC_ATTRIBUTES[child.tag].items():
+            text = child.get(key)
+            if text is None:
+                continue
+            where = f'{what} <{child.tag} {key}>'
+            values = _parse_numbers(text, where)
+            if len(values) not in counts:
+                expected = ' or '.join(str(count) for count in counts)
+                raise UrdfError(f'{where} must hold {expected} numbers, not {len(values)}: '
+                                f'{_quoted(text)}')
+
+
+def _quoted(text, limit=80):
+    """Return a piece of the model's text in quotes for a message, cut short if long."""
+    return f"'{text[:limit]}...'" if len(text) > limit else f"'{text}'"
 
 
 def _parse_numbers(text, what):
     try:
         values = [float(token) for token in text.replace(',', ' ').split()]
     except ValueError:
-        raise UrdfError(f"{what} is not a number: '{text}'") from None
+        raise UrdfError(f'{what} is not a number: {_quoted(text)}') from None
     if not all(math.isfinite(value) for value in values):
-        raise UrdfError(f'{what} contains NaN or infinity')
+        raise UrdfError(f'{what} contains NaN or infinity: {_quoted(text)}')
     return values
 
 

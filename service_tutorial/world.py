@@ -6,6 +6,7 @@ spec and the model is recompiled in place, so spawning or deleting one robot lea
 of every other robot exactly as it was.
 """
 
+import collections
 from dataclasses import dataclass
 import logging
 import math
@@ -25,6 +26,12 @@ _logger = logging.getLogger('service_tutorial.world')
 WORLD_FRAMES = ('', 'world')
 SCOPE_SEPARATOR = '::'
 MAX_MODEL_NAME_LENGTH = 64
+# Leaves room for the topic names under it within the DDS limit of about 250 characters.
+MAX_NAMESPACE_LENGTH = 200
+# Longest piece of a caller's text repeated in a refusal.
+MAX_QUOTED_LENGTH = 80
+# Fastest a diff drive turns a wheel's rim, in m/s; faster commands are scaled down to it.
+MAX_WHEEL_RIM_SPEED = 10.0
 # Beyond these magnitudes a model's state is treated as broken, like MuJoCo's own checks.
 HUGE_POSITION = 1e8
 HUGE_VELOCITY = 1e5
@@ -33,6 +40,8 @@ _STATE = mujoco.mjtState.mjSTATE_INTEGRATION
 _BAD_STATE_WARNINGS = (mujoco.mjtWarning.mjWARN_BADQPOS, mujoco.mjtWarning.mjWARN_BADQVEL,
                        mujoco.mjtWarning.mjWARN_BADQACC)
 _IDENTITY_QUATERNION = (1.0, 0.0, 0.0, 0.0)
+# What a model's integration state is made of, in MjData, carried over when the spec is rebuilt.
+_STATE_FIELDS = ('qpos', 'qvel', 'qacc_warmstart', 'qfrc_applied', 'act', 'ctrl')
 
 
 class WorldError(ValueError):
@@ -89,16 +98,26 @@ def _vector(values, size, what):
     if array.shape != (size,):
         raise WorldError(f'{what} must have {size} elements, not {array.size}')
     if not np.isfinite(array).all():
-        raise WorldError(f'{what} contains NaN or infinity')
+        raise WorldError(f'{what} contains NaN or infinity: {array.tolist()}')
     return array
 
 
 def _unit_quaternion(values, what='orientation'):
     quaternion = _vector(values, 4, what)
-    norm = np.linalg.norm(quaternion)
-    if norm < 1e-12:
-        raise WorldError(f'{what} quaternion is zero')
-    return quaternion / norm
+    largest = np.abs(quaternion).max()
+    if largest == 0.0:
+        raise WorldError(f'{what} quaternion is zero: {quaternion.tolist()}')
+    # Scaled first, so that neither huge nor tiny components overflow or underflow the norm.
+    quaternion = quaternion / largest
+    return quaternion / np.linalg.norm(quaternion)
+
+
+def _position(values, what='position'):
+    position = _vector(values, 3, what)
+    if np.abs(position).max() >= HUGE_POSITION:
+        raise WorldError(f'{what} must stay below {HUGE_POSITION:g} m in magnitude: '
+                         f'{position.tolist()}')
+    return position
 
 
 def _finite_number(value, what):
@@ -109,6 +128,16 @@ def _finite_number(value, what):
     if not math.isfinite(number):
         raise WorldError(f'{what} is NaN or infinite: {number}')
     return number
+
+
+def _take_steps(model, data, count=1):
+    """Step the physics; return False if MuJoCo gave up on a step, out of memory for one."""
+    try:
+        mujoco.mj_step(model, data, count)
+    except mujoco.FatalError as error:
+        _logger.warning('MuJoCo: %s', str(error).splitlines()[0])
+        return False
+    return True
 
 
 def _bounded(array, limit):
@@ -140,32 +169,51 @@ def _relative_quaternion(reference, quaternion):
     return _multiply(inverse, quaternion)
 
 
+def _quoted(text):
+    """Return user text in quotes for a message: control characters escaped, long text cut."""
+    shown = text[:MAX_QUOTED_LENGTH]
+    shown = ''.join(character if character.isprintable() else repr(character)[1:-1]
+                    for character in shown)
+    if len(text) > MAX_QUOTED_LENGTH:
+        return f"'{shown}...' ({len(text)} characters)"
+    return f"'{shown}'"
+
+
 def _check_model_name(name):
     if not isinstance(name, str) or not name:
         raise WorldError('model name must not be empty')
+    quoted = _quoted(name)
     if len(name) > MAX_MODEL_NAME_LENGTH:
-        raise WorldError(f"model name '{name}' is longer than {MAX_MODEL_NAME_LENGTH} "
+        raise WorldError(f'model name {quoted} is longer than {MAX_MODEL_NAME_LENGTH} '
                          'characters')
     if SCOPE_SEPARATOR in name:
-        raise WorldError(f"model name '{name}' must not contain '{SCOPE_SEPARATOR}'")
+        raise WorldError(f"model name {quoted} must not contain '{SCOPE_SEPARATOR}'")
     if '/' in name:
-        raise WorldError(f"model name '{name}' must not contain '/'")
+        raise WorldError(f"model name {quoted} must not contain '/'")
     if any(character.isspace() for character in name):
-        raise WorldError(f"model name '{name}' must not contain whitespace")
+        raise WorldError(f'model name {quoted} must not contain whitespace')
     if not name.isprintable() or any(character in '"\'<>&\\' for character in name):
-        raise WorldError(f"model name '{name}' contains a character that is not allowed")
+        raise WorldError(f'model name {quoted} contains a character that is not allowed')
     if name in WORLD_FRAMES:
-        raise WorldError(f"model name '{name}' is reserved for the world frame")
+        raise WorldError(f'model name {quoted} is reserved for the world frame')
 
 
 def _normalise_namespace(namespace):
+    """Return a robot namespace as '' or '/a/b', or refuse what ROS would refuse."""
     namespace = (namespace or '').strip()
     tokens = [token for token in namespace.split('/') if token]
     for token in tokens:
         if not (token[0].isalpha() or token[0] == '_') or not all(
-                character.isalnum() or character == '_' for character in token):
-            raise WorldError(f"robot namespace '{namespace}' is not a valid ROS namespace")
-    return '/' + '/'.join(tokens) if tokens else ''
+                character.isalnum() or character == '_' for character in token) or (
+                not token.isascii()):
+            raise WorldError(f'robot namespace {_quoted(namespace)} is not a valid ROS '
+                             f'namespace: {_quoted(token)} is not a letter or underscore '
+                             'followed by ASCII letters, digits and underscores')
+    normalised = '/' + '/'.join(tokens) if tokens else ''
+    if len(normalised) > MAX_NAMESPACE_LENGTH:
+        raise WorldError(f'robot namespace {_quoted(namespace)} is longer than '
+                         f'{MAX_NAMESPACE_LENGTH} characters')
+    return normalised
 
 
 class _Drive:
@@ -203,6 +251,10 @@ class _SpawnedModel:
         self.spawn_position = np.array(frame.pos)
         self.spawn_orientation = np.array(frame.quat)
         self.drive = None
+        # When the world last placed it (spawn, set state, reset), and whether the world has
+        # since put it back at its spawn pose because it became unstable.
+        self.placed = 0
+        self.recovered = False
         if description.diff_drive is not None:
             config = description.diff_drive
             self.drive = _Drive(config, len(config.left_joints) + len(config.right_joints))
@@ -241,22 +293,25 @@ class World:
                                   else _default_package_resolver())
         self._paused = False
         self._models = {}
+        self._removed = []
+        self._placements = 0
         self._next_event = math.inf
         self._kinematics_fresh = False
-        self._spec = self._make_spec(gravity)
+        self._gravity = gravity
+        self._spec = self._make_spec()
         self._model = self._spec.compile()
         self._data = mujoco.MjData(self._model)
         self._resize_buffers()
-        mujoco.mj_forward(self._model, self._data)
+        self._forward()
 
-    def _make_spec(self, gravity):
+    def _make_spec(self):
         spec = mujoco.MjSpec()
         spec.modelname = 'service_tutorial'
         spec.compiler.degree = False
         spec.compiler.inertiafromgeom = mujoco.mjtInertiaFromGeom.mjINERTIAFROMGEOM_FALSE
         option = spec.option
         option.timestep = self._timestep
-        option.gravity = gravity
+        option.gravity = self._gravity
         # Velocity servos on light wheels need the implicit damping term to stay stable.
         option.integrator = mujoco.mjtIntegrator.mjINT_IMPLICITFAST
         option.cone = mujoco.mjtCone.mjCONE_ELLIPTIC
@@ -313,6 +368,11 @@ class World:
         """Return the names of the spawned models, in spawn order."""
         return list(self._models)
 
+    def take_removed_models(self):
+        """Return the models the world removed by itself because they kept blowing up."""
+        removed, self._removed = self._removed, []
+        return removed
+
     def has_model(self, name):
         """Return True if a model of that name exists."""
         return name in self._models
@@ -332,7 +392,7 @@ class World:
     def _record(self, name):
         record = self._models.get(name) if isinstance(name, str) else None
         if record is None:
-            raise WorldError(f'no model named {name!r}')
+            raise WorldError(f'no model named {_quoted(str(name))}')
         return record
 
     def _drive_record(self, name):
@@ -349,9 +409,9 @@ class World:
         """Add a robot from URDF text; a refused request leaves the world unchanged."""
         _check_model_name(name)
         if name in self._models:
-            raise WorldError(f"a model named '{name}' already exists")
+            raise WorldError(f'a model named {_quoted(name)} already exists')
         namespace = _normalise_namespace(namespace)
-        position = _vector(position, 3, 'position')
+        position = _position(position)
         orientation = _unit_quaternion(orientation)
         frame_position, frame_orientation, _, _ = self._frame_state(reference_frame)
         world_position = frame_position + _rotate(frame_orientation, position)
@@ -367,21 +427,29 @@ class World:
                                                       description.root_position)
             world_orientation = _multiply(world_orientation, description.root_orientation)
 
-        frame = self._spec.worldbody.add_frame(pos=world_position, quat=world_orientation)
-        root = None
+        # MuJoCo carries positions, velocities and controls over a recompile, not the rest.
+        saved = self._saved_state(self._models)
         try:
-            root = frame.attach_body(description.spec.worldbody.first_body(),
-                                     name + SCOPE_SEPARATOR, '')
+            frame, root = self._attach(self._spec, name, description, world_position,
+                                       world_orientation)
             model, data = self._spec.recompile(self._model, self._data)
         except Exception as error:
-            self._remove_from_spec(name, frame, root)
+            # The live spec still holds the half-attached robot: build it afresh without it.
+            self._rebuild(self._models)
             reason = '; '.join(line.strip() for line in str(error).splitlines() if line.strip())
             reason = reason[len('Error: '):] if reason.startswith('Error: ') else reason
             raise WorldError(f"model '{name}' does not compile: {reason}") from None
         self._model, self._data = model, data
         record = _SpawnedModel(name, namespace, description, frame, root)
         self._models[name] = record
+        self._mark_placed(record)
         self._after_recompile()
+        self._restore_state(saved)
+        failure = self._forward()
+        if failure is not None:
+            self._rebuild({other: kept for other, kept in self._models.items() if other != name})
+            raise WorldError(f"model '{name}' cannot be simulated at {world_position.tolist()}: "
+                             f'{failure}; does it overlap other models?')
         if record.drive is not None:
             self._restart_odometry(record)
         _logger.info("spawned model '%s' at %s", name, np.round(world_position, 4).tolist())
@@ -398,28 +466,92 @@ class World:
 
     def delete_model(self, name):
         """Remove a model; every other model keeps its state."""
-        record = self._record(name)
-        self._remove_from_spec(name, record.frame, record.root)
-        self._model, self._data = self._spec.recompile(self._model, self._data)
-        del self._models[name]
-        self._after_recompile()
+        self._record(name)
+        self._rebuild({other: record for other, record in self._models.items() if other != name})
         _logger.info("deleted model '%s'", name)
 
-    def _remove_from_spec(self, name, frame, root):
-        if root is not None:
-            self._spec.delete(root)
-        self._spec.delete(frame)
-        prefix = name + SCOPE_SEPARATOR
-        for mesh in [mesh for mesh in self._spec.meshes if mesh.name.startswith(prefix)]:
-            self._spec.delete(mesh)
+    @staticmethod
+    def _attach(spec, name, description, position, orientation):
+        """Attach a robot's spec to a world spec under the name prefix; return frame and root."""
+        frame = spec.worldbody.add_frame(pos=position, quat=orientation)
+        # Attaching renames the robot's own spec too; a copy keeps the description as loaded.
+        root = frame.attach_body(description.spec.copy().worldbody.first_body(),
+                                 name + SCOPE_SEPARATOR, '')
+        return frame, root
+
+    def _rebuild(self, models):
+        """
+        Build the spec, model and data afresh, holding just the given models.
+
+        A spec keeps a copy of every robot ever attached to it, deleted or not, so deleting
+        from the live spec would make a long-running world grow without bound. A fresh spec
+        holds only the live robots; their integration state is carried over, so the
+        simulation goes on exactly as if the spec had been edited in place.
+        """
+        spec = self._make_spec()
+        attached = {name: self._attach(spec, name, record.description, record.frame.pos,
+                                       record.frame.quat)
+                    for name, record in models.items()}
+        model = spec.compile()
+        data = mujoco.MjData(model)
+        data.time = self._data.time
+        saved = self._saved_state(models)
+        self._spec, self._model, self._data, self._models = spec, model, data, models
+        for record in models.values():
+            record.frame, record.root = attached[record.name]
+        self._after_recompile()
+        self._restore_state(saved)
+        self._forward()
+
+    @staticmethod
+    def _state_indices(record):
+        """Return the indices of a model's entries in the arrays named by _STATE_FIELDS."""
+        return (record.qpos_index, record.dof_index, record.dof_index, record.dof_index,
+                record.act_index, record.actuator_index)
+
+    def _saved_state(self, models):
+        """Return a copy of each model's share of the integration state, by model name."""
+        data = self._data
+        return {name: [getattr(data, field)[index].copy() for field, index in
+                       zip(_STATE_FIELDS, self._state_indices(record))]
+                for name, record in models.items()}
+
+    def _restore_state(self, saved):
+        """Write saved shares of the integration state back, at the models' current places."""
+        data = self._data
+        for name, values in saved.items():
+            for field, index, value in zip(_STATE_FIELDS,
+                                           self._state_indices(self._models[name]), values):
+                getattr(data, field)[index] = value
+        self._kinematics_fresh = False
+
+    def _mark_placed(self, record):
+        """Note that a model was just put somewhere on purpose, not by a recovery."""
+        self._placements += 1
+        record.placed = self._placements
+        record.recovered = False
 
     def _after_recompile(self):
         self._kinematics_fresh = False
         self._resize_buffers()
         for record in self._models.values():
             self._index_model(record)
-        mujoco.mj_forward(self._model, self._data)
         self._schedule_events()
+
+    def _forward(self):
+        """
+        Compute what follows from the state; return why MuJoCo could not, or None.
+
+        If MuJoCo could not, the next step fails the same way and its recovery sorts it out.
+        """
+        self._kinematics_fresh = False
+        try:
+            mujoco.mj_forward(self._model, self._data)
+        except mujoco.FatalError as error:
+            reason = str(error).splitlines()[0]
+            _logger.warning('MuJoCo: %s', reason)
+            return reason
+        return None
 
     def _resize_buffers(self):
         size = mujoco.mj_stateSize(self._model, _STATE)
@@ -489,19 +621,20 @@ class World:
             raise WorldError(f'step count must not be negative: {count}')
         if self._paused or count == 0:
             return 0
-        model, data = self._model, self._data
         remaining = count
         while remaining > 0:
+            # Re-read every chunk: recovering from an instability may rebuild model and data.
+            model, data = self._model, self._data
             chunk = remaining
             if self._next_event < math.inf:
                 steps_to_event = math.ceil((self._next_event - data.time) / self._timestep - 1e-6)
                 chunk = min(chunk, max(1, steps_to_event))
             mujoco.mj_getState(model, data, self._chunk_start_state, _STATE)
-            mujoco.mj_step(model, data, chunk)
+            completed = _take_steps(model, data, chunk)
             remaining -= chunk
-            if not self._state_is_sane():
+            if not (completed and self._state_is_sane()):
                 self._recover(chunk)
-            if data.time >= self._next_event - 0.5 * self._timestep:
+            if self._data.time >= self._next_event - 0.5 * self._timestep:
                 self._handle_drive_events()
         self._kinematics_fresh = False
         return count
@@ -529,31 +662,73 @@ class World:
                              or _bounded(data.qacc[record.dof_index], HUGE_ACCELERATION)))]
 
     def _recover(self, chunk):
-        """Replay the failed chunk from its start, resetting only the robots that blow up."""
-        model, data = self._model, self._data
-        mujoco.mj_setState(model, data, self._chunk_start_state, _STATE)
+        """
+        Replay the failed chunk from its start, one step at a time, sorting out each bad step.
+
+        A robot that breaks a step is put back at its spawn pose at rest and the step is taken
+        again; a robot that breaks a step again after that is removed from the world. The
+        others go through the step as if nothing had happened.
+        """
+        mujoco.mj_setState(self._model, self._data, self._chunk_start_state, _STATE)
         self._clear_bad_state_warnings()
         # A state already broken at the start of the chunk was put there from outside.
         self._reset_models(self._broken_models(check_acceleration=False),
                            'was given NaN, infinity or a huge value')
         for _ in range(chunk):
-            mujoco.mj_getState(model, data, self._step_start_state, _STATE)
-            mujoco.mj_step(model, data)
-            if self._state_is_sane():
-                continue
-            broken = self._broken_models()
-            # NaN spreads to every robot through the shared constraint solver within a step,
-            # but the smooth (unconstrained) acceleration stays within the robot it came from.
-            culprits = [record for record in broken
-                        if not _bounded(data.qacc_smooth[record.dof_index], HUGE_ACCELERATION)]
-            culprits = culprits or broken or list(self._models.values())
-            mujoco.mj_setState(model, data, self._step_start_state, _STATE)
-            self._clear_bad_state_warnings()
-            self._reset_models(culprits, 'became unstable')
-            mujoco.mj_step(model, data)
-            if not self._state_is_sane():
+            mujoco.mj_getState(self._model, self._data, self._step_start_state, _STATE)
+            completed = _take_steps(self._model, self._data)
+            # Every retake resets a robot for the first time or removes one, so this ends.
+            for _ in range(2 * len(self._models) + 1):
+                if completed and self._state_is_sane():
+                    break
+                culprit = self._culprit() if completed else self._crowded_model()
+                if culprit is None:
+                    self._reset_broken_state()
+                    break
+                completed = self._retake_step_without(culprit)
+            else:
                 self._reset_broken_state()
         self._clear_bad_state_warnings()
+
+    def _culprit(self):
+        """Return the model that most likely broke the last step, or None."""
+        data = self._data
+        broken = self._broken_models()
+        # NaN spreads through the constraint solver to every robot in touch with the one it
+        # came from, but the smooth (unconstrained) acceleration stays within that robot.
+        smooth = [record for record in broken
+                  if not _bounded(data.qacc_smooth[record.dof_index], HUGE_ACCELERATION)]
+        # Failing that, the robot placed last, by a spawn or a set state, is the likeliest.
+        return max(smooth or broken, key=lambda record: record.placed, default=None)
+
+    def _crowded_model(self):
+        """Return the model in most contacts in the step MuJoCo gave up on, or None."""
+        model, data = self._model, self._data
+        roots = {record.root_id: record for record in self._models.values()}
+        geoms = np.asarray(data.contact.geom, dtype=int).reshape(-1)
+        counts = collections.Counter(
+            int(body) for body in model.body_rootid[model.geom_bodyid[geoms]] if body in roots)
+        most = max(counts.values(), default=0)
+        candidates = ([roots[body] for body, count in counts.items() if count == most]
+                      or list(self._models.values()))
+        return max(candidates, key=lambda record: record.placed, default=None)
+
+    def _retake_step_without(self, culprit):
+        """Undo the last step, reset or remove the culprit, and take the step again."""
+        mujoco.mj_setState(self._model, self._data, self._step_start_state, _STATE)
+        self._clear_bad_state_warnings()
+        if culprit.recovered:
+            _logger.error("model '%s' became unstable again after it was put back at its spawn "
+                          'pose; it is removed from the world', culprit.name)
+            self._rebuild({name: record for name, record in self._models.items()
+                           if record is not culprit})
+            self._removed.append(culprit.name)
+            # The rebuild made new state buffers: the step now starts from here.
+            mujoco.mj_getState(self._model, self._data, self._step_start_state, _STATE)
+        else:
+            self._reset_models([culprit], 'became unstable')
+            culprit.recovered = True
+        return _take_steps(self._model, self._data)
 
     def _clear_bad_state_warnings(self):
         for kind in _BAD_STATE_WARNINGS:
@@ -598,7 +773,7 @@ class World:
                 _logger.warning("model '%s' is put back to its spawn pose at rest", name)
                 self._stop_drive(record)
                 self._restart_odometry(record)
-        mujoco.mj_forward(model, data)
+        self._forward()
         self._schedule_events()
 
     # ---------------------------------------------------------------- resets
@@ -618,9 +793,10 @@ class World:
         if keep_time:
             data.time = time
         for record in self._models.values():
+            self._mark_placed(record)
             if record.free_qpos_adr is None:
                 self._place_anchored(record, record.spawn_position, record.spawn_orientation)
-        mujoco.mj_forward(model, data)
+        self._forward()
         self._kinematics_fresh = False
         for record in self._models.values():
             if record.drive is not None:
@@ -659,7 +835,7 @@ class World:
             body_id = mujoco.mj_name2id(self._model, mujoco.mjtObj.mjOBJ_BODY, reference_frame)
             if body_id > 0:
                 return body_id
-        raise WorldError(f"unknown reference frame '{reference_frame}'")
+        raise WorldError(f'unknown reference frame {_quoted(reference_frame)}')
 
     def _frame_state(self, reference_frame):
         return self._body_state(self._frame_body(reference_frame))
@@ -685,13 +861,15 @@ class World:
                         angular_velocity=(0.0, 0.0, 0.0), reference_frame=''):
         """Move a model's base link to a pose and twist given in reference_frame."""
         record = self._record(name)
-        position = _vector(position, 3, 'position')
+        position = _position(position)
         orientation = _unit_quaternion(orientation)
         linear_velocity = _vector(linear_velocity, 3, 'linear_velocity')
         angular_velocity = _vector(angular_velocity, 3, 'angular_velocity')
-        if (np.abs(linear_velocity).max() >= HUGE_VELOCITY
-                or np.abs(angular_velocity).max() >= HUGE_VELOCITY):
-            raise WorldError(f'velocity of model {name!r} must stay below {HUGE_VELOCITY:g}')
+        for what, velocity in (('linear_velocity', linear_velocity),
+                               ('angular_velocity', angular_velocity)):
+            if np.abs(velocity).max() >= HUGE_VELOCITY:
+                raise WorldError(f'{what} of model {name!r} must stay below {HUGE_VELOCITY:g} '
+                                 f'in magnitude: {velocity.tolist()}')
         frame_position, frame_orientation, frame_linear, frame_angular = (
             self._frame_state(reference_frame))
         world_position = frame_position + _rotate(frame_orientation, position)
@@ -712,6 +890,7 @@ class World:
             data.qvel[dof:dof + 3] = world_linear
             data.qvel[dof + 3:dof + 6] = _rotate_back(world_orientation, world_angular)
             data.qacc_warmstart[record.dof_index] = 0.0
+        self._mark_placed(record)
         self._kinematics_fresh = False
 
     def _place_anchored(self, record, position, orientation):
@@ -732,19 +911,36 @@ class World:
     # ---------------------------------------------------------------- diff drive
 
     def command_velocity(self, name, linear_x, angular_z):
-        """Command a diff-drive robot's body twist; it lapses after cmd_vel_timeout seconds."""
+        """
+        Command a diff-drive robot's body twist; it lapses after cmd_vel_timeout seconds.
+
+        A command that would turn a wheel rim faster than MAX_WHEEL_RIM_SPEED is scaled down
+        to that speed, keeping the radius of the turn. Return the (linear_x, angular_z) that
+        is carried out.
+        """
         record = self._drive_record(name)
         linear_x = _finite_number(linear_x, 'linear_x')
         angular_z = _finite_number(angular_z, 'angular_z')
         drive = record.drive
-        self._update_encoder_odometry(record)
         config = drive.config
+        # Scale before the wheel speeds are worked out, so that no sum of huge values overflows.
+        fastest_rim = max(abs(linear_x), abs(angular_z) * config.wheel_separation / 2.0)
+        if fastest_rim > MAX_WHEEL_RIM_SPEED:
+            scale = MAX_WHEEL_RIM_SPEED / fastest_rim
+            linear_x, angular_z = linear_x * scale, angular_z * scale
         left, right = wheel_speeds(linear_x, angular_z, config.wheel_separation,
                                    config.wheel_radius)
+        fastest_wheel = max(abs(left), abs(right)) * config.wheel_radius
+        if fastest_wheel > MAX_WHEEL_RIM_SPEED:
+            scale = MAX_WHEEL_RIM_SPEED / fastest_wheel
+            linear_x, angular_z = linear_x * scale, angular_z * scale
+            left, right = left * scale, right * scale
+        self._update_encoder_odometry(record)
         self._set_wheel_targets(record, left, right)
         drive.expiry = (self._data.time + self._cmd_vel_timeout if self._cmd_vel_timeout > 0.0
                         else math.inf)
         self._schedule_events()
+        return linear_x, angular_z
 
     def _set_wheel_targets(self, record, left, right):
         """
