@@ -1,0 +1,71 @@
+"""
+Ask the world for a picture through /mujoco/save_snapshot and print where it was written.
+
+The world renders its camera's view (camera_position, camera_look_at in config/world.yaml)
+and writes the PNG into its snapshot_directory parameter; the request carries no path. With the
+ros2 command: `ros2 service call /mujoco/save_snapshot std_srvs/srv/Trigger`.
+"""
+
+import argparse
+import sys
+
+import rclpy
+from rclpy.executors import ExternalShutdownException
+from rclpy.node import Node
+from rclpy.utilities import remove_ros_args
+from service_tutorial.model_services import call, DEFAULT_TIMEOUT
+from std_srvs.srv import Trigger
+
+# Relative, like the model services: /mujoco/save_snapshot from the root namespace.
+SAVE_SNAPSHOT_SERVICE = 'mujoco/save_snapshot'
+
+
+class SnapshotClient(Node):
+    """Calls the world's save_snapshot service."""
+
+    def __init__(self):
+        super().__init__('save_snapshot_client')
+        self.snapshot_cli = self.create_client(Trigger, SAVE_SNAPSHOT_SERVICE)
+
+    def save_snapshot(self, *, timeout=DEFAULT_TIMEOUT):
+        """Have the world write a snapshot; return the path, or raise with its reason."""
+        response = call(self, self.snapshot_cli, Trigger.Request(), timeout=timeout)
+        if not response.success:
+            raise RuntimeError(response.message)
+        return response.message
+
+
+def parse_arguments(argv):
+    """Read the command line (ROS arguments already removed)."""
+    parser = argparse.ArgumentParser(
+        prog='save_snapshot',
+        description='Have the MuJoCo world write a PNG of its camera view; print its path.')
+    parser.add_argument('--timeout', type=float, default=DEFAULT_TIMEOUT,
+                        help='seconds to wait for the service and its answer '
+                             '(default: %(default)s)')
+    return parser.parse_args(argv)
+
+
+def main(args=None):
+    """Save a snapshot and print its path; exit with status 0 once it is written."""
+    options = parse_arguments(remove_ros_args(sys.argv if args is None else args)[1:])
+    rclpy.init(args=args)
+    node = None
+    status = 1
+    try:
+        node = SnapshotClient()
+        print(node.save_snapshot(timeout=options.timeout))
+        status = 0
+    except (TimeoutError, RuntimeError) as error:
+        print(f'save_snapshot: {error}', file=sys.stderr)
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+    finally:
+        if node is not None:
+            node.destroy_node()
+        rclpy.try_shutdown()
+    return status
+
+
+if __name__ == '__main__':
+    sys.exit(main())

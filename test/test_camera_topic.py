@@ -1,0 +1,134 @@
+"""The world node's camera through real subscribers and a real save_snapshot client."""
+
+import math
+import os
+import struct
+import time
+import zlib
+
+import pytest
+from rclpy.parameter import Parameter
+from rosgraph_msgs.msg import Clock
+from sensor_msgs.msg import CameraInfo, Image
+from service_tutorial.mujoco_world import MujocoWorld
+from std_srvs.srv import Trigger
+
+pytestmark = pytest.mark.ros
+
+IMAGE_TOPIC = '/mujoco/camera/image_raw'
+INFO_TOPIC = '/mujoco/camera/camera_info'
+WIDTH, HEIGHT, FOVY = 160, 120, 60.0
+
+
+def start_world(ros, **parameters):
+    """Start the world node with parameter overrides and wait for its first /clock."""
+    overrides = [Parameter(name, value=value) for name, value in parameters.items()]
+    node = ros.add_node(MujocoWorld(parameter_overrides=overrides))
+    clock = ros.subscribe(Clock, '/clock')
+    assert ros.wait_for(lambda: clock, timeout=10.0), 'no /clock from the world'
+    return node
+
+
+def seconds(stamp):
+    """Convert a builtin_interfaces/Time to seconds."""
+    return stamp.sec + stamp.nanosec * 1e-9
+
+
+def png_size(path):
+    """Check a PNG's structure and CRCs; return its (width, height)."""
+    with open(path, 'rb') as png_file:
+        content = png_file.read()
+    assert content[:8] == b'\x89PNG\r\n\x1a\n'
+    position, kinds, data = 8, [], b''
+    while position < len(content):
+        length, kind = struct.unpack('>I4s', content[position:position + 8])
+        payload = content[position + 8:position + 8 + length]
+        assert struct.unpack('>I', content[position + 8 + length:position + 12 + length])[0] \
+            == zlib.crc32(kind + payload)
+        kinds.append(kind)
+        data += payload if kind == b'IDAT' else b''
+        if kind == b'IHDR':
+            width, height, depth, colour_type = struct.unpack('>IIBB', payload[:10])
+        position += 12 + length
+    assert kinds[0] == b'IHDR' and kinds[-1] == b'IEND'
+    assert (depth, colour_type) == (8, 2), 'an 8-bit RGB PNG is expected'
+    assert len(zlib.decompress(data)) == height * (1 + 3 * width)
+    return width, height
+
+
+def test_frames_arrive_at_the_camera_rate(ros):
+    world = start_world(ros, camera_enabled=True, camera_rate=5.0, camera_width=WIDTH,
+                        camera_height=HEIGHT, camera_fovy=FOVY)
+    images = ros.subscribe(Image, IMAGE_TOPIC)
+    infos = ros.subscribe(CameraInfo, INFO_TOPIC)
+    assert ros.wait_for(lambda: images, timeout=10.0), 'no camera image within 10 s'
+    first, sim_start, wall_start = len(images), world.world.time, time.monotonic()
+    time.sleep(2.0)
+    count, sim_time = len(images) - first, world.world.time - sim_start
+    wall_time = time.monotonic() - wall_start
+    # The rate is in Hz of simulation time. A software renderer (no GPU) can slow the world
+    # below real time, so frames per wall second are checked against the pace it kept.
+    assert count == pytest.approx(5.0 * sim_time, abs=1.5), \
+        f'{count} frames in {sim_time:.2f} s of simulation time, 5 per second expected'
+    assert sim_time / wall_time > 0.3, 'the camera slowed the world down to a crawl'
+    # Stamps are simulation time, one period apart.
+    stamps = [seconds(msg.header.stamp) for msg in images]
+    assert all(abs(b - a - 0.2) < 0.003 for a, b in zip(stamps, stamps[1:])), stamps
+
+    image = images[-1]
+    assert (image.width, image.height, image.encoding, image.step) == \
+        (WIDTH, HEIGHT, 'rgb8', 3 * WIDTH)
+    assert image.header.frame_id == 'camera_optical_frame'
+    assert len(image.data) == HEIGHT * 3 * WIDTH
+    assert len(set(bytes(image.data))) > 20, 'the image is blank'
+
+    assert ros.wait_for(lambda: infos, timeout=2.0)
+    info = infos[-1]
+    focal = HEIGHT / 2 / math.tan(math.radians(FOVY) / 2)
+    assert (info.width, info.height) == (WIDTH, HEIGHT)
+    assert list(info.k) == pytest.approx(
+        [focal, 0, (WIDTH - 1) / 2, 0, focal, (HEIGHT - 1) / 2, 0, 0, 1])
+    assert list(info.p) == pytest.approx(
+        [focal, 0, (WIDTH - 1) / 2, 0, 0, focal, (HEIGHT - 1) / 2, 0, 0, 0, 1, 0])
+    assert info.header.frame_id == image.header.frame_id
+
+
+def test_disabled_camera_has_no_topic_and_renders_nothing(ros):
+    world = start_world(ros)
+    images = ros.subscribe(Image, IMAGE_TOPIC)
+    time.sleep(0.5)
+    assert world.count_publishers(IMAGE_TOPIC) == 0
+    assert world.count_publishers(INFO_TOPIC) == 0
+    assert images == []
+    assert world.camera_stream.camera._renderer is None
+
+
+def test_enabled_camera_renders_only_for_a_subscriber(ros):
+    world = start_world(ros, camera_enabled=True, camera_rate=20.0, camera_width=WIDTH,
+                        camera_height=HEIGHT)
+    assert ros.wait_for(lambda: world.count_publishers(IMAGE_TOPIC) == 1, timeout=5.0)
+    time.sleep(0.5)
+    assert world.camera_stream.camera._renderer is None, 'rendered with nobody listening'
+
+
+def test_save_snapshot_writes_a_png_into_the_snapshot_directory(ros, tmp_path):
+    directory = tmp_path / 'snapshots'
+    start_world(ros, snapshot_directory=str(directory), camera_width=WIDTH,
+                camera_height=HEIGHT)
+    response = ros.call(Trigger, '/mujoco/save_snapshot', Trigger.Request())
+    assert response.success, response.message
+    path = response.message
+    assert os.path.dirname(path) == str(directory)
+    assert os.listdir(directory) == [os.path.basename(path)]
+    assert png_size(path) == (WIDTH, HEIGHT)
+    assert os.listdir(tmp_path) == ['snapshots'], 'nothing is written anywhere else'
+
+
+def test_save_snapshot_reports_a_directory_it_cannot_write(ros, tmp_path):
+    blocker = tmp_path / 'a_file'
+    blocker.write_text('not a directory')
+    start_world(ros, snapshot_directory=str(blocker / 'snapshots'), camera_width=WIDTH,
+                camera_height=HEIGHT)
+    response = ros.call(Trigger, '/mujoco/save_snapshot', Trigger.Request())
+    assert not response.success
+    assert 'could not save a snapshot' in response.message
