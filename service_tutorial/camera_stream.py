@@ -2,13 +2,16 @@
 The world node's camera: an image topic, its camera_info, and snapshots written on request.
 
 The node calls publish_due() from its publish step. With camera_enabled false no image
-publisher exists and publish_due() returns at once; with it true, a frame is rendered only
-when its time has come (camera_rate, in Hz of simulation time, like the node's other rates)
-and someone subscribes to the image. The renderer and its GL context are made on first use.
+publisher exists and publish_due() returns at once. With it true, frames fall due at
+camera_rate, in Hz of simulation time like the node's other rates, but only while someone
+subscribes: without subscribers next_due stays infinite, so the stepping loop never stops for
+the camera, and publish_due() looks for a subscriber a few times per wall second. The renderer
+and its GL context are made on first use.
 """
 
 import math
 import os
+import time
 
 from rclpy.time import Time
 from sensor_msgs.msg import CameraInfo, Image
@@ -17,6 +20,7 @@ from service_tutorial.rendering import SceneCamera
 from std_srvs.srv import Trigger
 
 CAMERA_FRAME = 'camera_optical_frame'  # z forward, x right, y down (REP 103, optical frames)
+SUBSCRIBER_CHECK_PERIOD = 0.2  # s of wall time between two looks for a first subscriber
 
 
 def stamp_msg(seconds):
@@ -41,12 +45,12 @@ class CameraStream:
             list(param('camera_position').value), list(param('camera_look_at').value),
             param('camera_fovy').value)
         self.snapshot_directory = param('snapshot_directory').value or os.getcwd()
-        self.next_due = math.inf
+        self.next_due = math.inf  # simulation time of the next frame; inf: nobody listens
+        self._next_subscriber_check = 0.0
         self.image_pub = self.info_pub = None
         if self.enabled:
             self.image_pub = node.create_publisher(Image, '~/camera/image_raw', 2)
             self.info_pub = node.create_publisher(CameraInfo, '~/camera/camera_info', 2)
-            self.next_due = world.time
         self.snapshot_srv = node.create_service(
             Trigger, '~/save_snapshot', self.save_snapshot_callback)
 
@@ -54,6 +58,14 @@ class CameraStream:
         """Publish a frame and its camera_info if one is due and anyone listens."""
         if not self.enabled:
             return
+        if self.next_due == math.inf:
+            wall = time.monotonic()
+            if wall < self._next_subscriber_check:
+                return
+            self._next_subscriber_check = wall + SUBSCRIBER_CHECK_PERIOD
+            if not self._listened_to():
+                return
+            self.next_due = now  # a first subscriber: the first frame is due now
         # Half a step of slack: simulation time is a sum of steps and carries rounding errors.
         soon = now + 0.5 * self.world.timestep
         if soon < self.next_due:
@@ -61,10 +73,18 @@ class CameraStream:
                 return
             # Simulation time went back (reset_simulation): the next frame is due now.
         self.next_due = now + self.period
+        if not self._listened_to():
+            self.next_due = math.inf
+            return
         if self.info_pub.get_subscription_count() > 0:
             self.info_pub.publish(self.camera_info(now))
         if self.image_pub.get_subscription_count() > 0:
             self.image_pub.publish(self.image(now))
+
+    def _listened_to(self):
+        """Tell whether anyone subscribes to the image or to the camera_info."""
+        return self.image_pub.get_subscription_count() > 0 or \
+            self.info_pub.get_subscription_count() > 0
 
     def image(self, now):
         """Render the world as a sensor_msgs/Image (rgb8) stamped with simulation time."""

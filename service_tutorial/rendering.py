@@ -15,6 +15,10 @@ import sys
 import mujoco
 import numpy as np
 
+# Clipping distances of the camera, in m: the floor stays visible up to FAR_CLIP.
+NEAR_CLIP = 0.02
+FAR_CLIP = 100.0
+
 
 def prefer_headless_gl():
     """Make MuJoCo render through EGL when nobody chose a GL backend and there is no display."""
@@ -118,9 +122,11 @@ class SceneCamera:
         if model is not self._scene_model:
             self._make_renderer(model)
         self._renderer.update_scene(data, self.mjv_camera)
-        # The free camera takes its field of view from the model; give it ours instead.
+        # The free camera takes its field of view and its clipping distances from the model
+        # (they scale with its extent, which changes with every spawn); give it ours instead.
         for eye in self._renderer.scene.camera:
-            half_height = eye.frustum_near * math.tan(math.radians(self.fovy) / 2.0)
+            eye.frustum_near, eye.frustum_far = NEAR_CLIP, FAR_CLIP
+            half_height = NEAR_CLIP * math.tan(math.radians(self.fovy) / 2.0)
             eye.frustum_top, eye.frustum_bottom = half_height, -half_height
             eye.frustum_center = 0.0
             eye.frustum_width = 0.0  # 0: from the image's aspect ratio

@@ -109,6 +109,13 @@ def test_enabled_camera_renders_only_for_a_subscriber(ros):
     assert ros.wait_for(lambda: world.count_publishers(IMAGE_TOPIC) == 1, timeout=5.0)
     time.sleep(0.5)
     assert world.camera_stream.camera._renderer is None, 'rendered with nobody listening'
+    assert world.camera_stream.next_due == math.inf, 'stepping still stops for the camera'
+    # A subscriber comes and goes: frames flow, then the camera goes quiet again.
+    images = []
+    subscription = ros.client_node.create_subscription(Image, IMAGE_TOPIC, images.append, 10)
+    assert ros.wait_for(lambda: len(images) >= 2, timeout=10.0)
+    ros.client_node.destroy_subscription(subscription)
+    assert ros.wait_for(lambda: world.camera_stream.next_due == math.inf, timeout=5.0)
 
 
 def test_save_snapshot_writes_a_png_into_the_snapshot_directory(ros, tmp_path):
