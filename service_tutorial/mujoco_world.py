@@ -30,12 +30,17 @@ import yaml
 PACKAGE = 'service_tutorial'
 # Longest stretch of wall time one timer tick may spend stepping before it lets services run.
 STEP_BUDGET = 0.005
-# Free-running, a tick steps for at least this many times as long as the executor takes to come
-# back to it (that grows with the number of topics), but never longer than MAX_STEP_BUDGET.
+# The executor's turn between two ticks costs CPU time that grows with the node's topics (about
+# 1.8 ms with 50 robots), so ticks are spaced to keep it a small share of the time. Free-running,
+# a tick steps EXECUTOR_SHARE times as long as a turn (STEP_BUDGET to MAX_STEP_BUDGET); in real
+# time, ticks come every REAL_TIME_SHARE turns (REAL_TIME_PERIOD to MAX_REAL_TIME_PERIOD);
+# paused, there is nothing to step.
 EXECUTOR_SHARE = 20.0
 MAX_STEP_BUDGET = 0.05
-# Free-running, /clock is published at most this often (wall s): sim-time nodes time by it.
-CLOCK_WALL_PERIOD = 0.001
+REAL_TIME_SHARE = 5.0
+REAL_TIME_PERIOD = 0.002
+MAX_REAL_TIME_PERIOD = 0.02
+PAUSED_STEP_PERIOD_NS = 20_000_000
 
 
 def load_default_parameters():
@@ -132,8 +137,8 @@ class MujocoWorld(Node):
         self._free_running = self.real_time_factor == 0.0
         self._next_clock_wall = self._next_odom_wall = self._next_joint_states_wall = 0.0
         self._step_wall_time = 1e-5  # running estimate of one physics step, in wall seconds
-        self._executor_turn = 0.0  # running estimate of the wall time between two ticks
-        self._tick_end = None
+        self._executor_turn = 0.0  # running estimate of the CPU time between two ticks
+        self._tick_end_cpu = None
         self._clock_msg = Clock()
         self.robots = {}
         self.viewer = None
@@ -168,7 +173,7 @@ class MujocoWorld(Node):
 
         # Free-running stepping uses a zero-period timer: it fires on every executor turn,
         # and the executor serves pending service calls between two turns.
-        period = 0.0 if self.real_time_factor == 0.0 else 0.002
+        period = 0.0 if self.real_time_factor == 0.0 else REAL_TIME_PERIOD
         self._anchor_real_time()
         # The world is the source of /clock, so it paces itself on the steady wall clock even
         # when use_sim_time is set (a sim-time timer would wait for its own /clock forever).
@@ -188,16 +193,19 @@ class MujocoWorld(Node):
     def step_callback(self):
         """Advance the physics to keep pace with the wall clock, then publish what is due."""
         world = self.world
+        tick_start_cpu = time.thread_time()
+        if self._tick_end_cpu is not None:
+            # Follows the cheapest recent turns: a slow service call is not overhead.
+            self._executor_turn = max(0.0, min(tick_start_cpu - self._tick_end_cpu,
+                                               1.05 * self._executor_turn + 1e-6))
+        period_ns = self._tick_period_ns()
+        if self.step_timer.timer_period_ns != period_ns:
+            self.step_timer.timer_period_ns = period_ns
         if world.paused:
             self._anchor_real_time()
         elif self.real_time_factor == 0.0:
-            tick_start = time.monotonic()
-            if self._tick_end is not None:
-                # Follows the shortest recent turns: a slow service call is not overhead.
-                self._executor_turn = min(tick_start - self._tick_end,
-                                          1.05 * self._executor_turn + 1e-6)
-            deadline = tick_start + min(MAX_STEP_BUDGET,
-                                        max(STEP_BUDGET, EXECUTOR_SHARE * self._executor_turn))
+            deadline = time.monotonic() + min(
+                MAX_STEP_BUDGET, max(STEP_BUDGET, EXECUTOR_SHARE * self._executor_turn))
             while True:
                 start = time.monotonic()
                 if start >= deadline:
@@ -207,7 +215,6 @@ class MujocoWorld(Node):
                 self._step_wall_time += 0.5 * (
                     (time.monotonic() - start) / steps - self._step_wall_time)
                 self.publish_due()
-            self._tick_end = time.monotonic()
         else:
             wall_elapsed = time.monotonic() - self._wall_anchor
             target = self._sim_anchor + wall_elapsed * self.real_time_factor
@@ -224,11 +231,23 @@ class MujocoWorld(Node):
         self.publish_due()
         if self.viewer is not None:
             self._sync_viewer()
+        self._tick_end_cpu = time.thread_time()
+
+    def _tick_period_ns(self):
+        """Return the step timer's period for the current state, in whole milliseconds."""
+        if self.world.paused:
+            return PAUSED_STEP_PERIOD_NS
+        if self.real_time_factor == 0.0:
+            return 0
+        period = min(MAX_REAL_TIME_PERIOD,
+                     max(REAL_TIME_PERIOD, REAL_TIME_SHARE * self._executor_turn))
+        return round(period * 1e3) * 1_000_000
 
     def _steps_to_next_publication(self):
         due = min(self._next_clock, self._next_odom, self._next_joint_states,
                   self.camera_stream.next_due)
-        return max(1, math.ceil((due - self.world.time) / self.world.timestep - 1e-9))
+        # Half a step of slack, as in publish_due().
+        return max(1, math.ceil((due - self.world.time) / self.world.timestep - 0.5))
 
     def _free_running_chunk(self, wall, deadline):
         """Return the steps until a stream falls due (simulation and wall time) or deadline."""
@@ -241,7 +260,7 @@ class MujocoWorld(Node):
             steps = min(steps, max((next_sim - world.time) / world.timestep,
                                    (next_wall - wall) / per_step))
         steps = min(steps, (self.camera_stream.next_due - world.time) / world.timestep)
-        return max(1, math.ceil(steps - 1e-6))
+        return max(1, math.ceil(steps - 0.5))
 
     def _wall_due(self, period):
         """Return the wall time before which a stream just published may not publish again."""
@@ -275,7 +294,7 @@ class MujocoWorld(Node):
         """Publish the simulation time on /clock."""
         now = self.world.time
         self._next_clock = now + self._clock_period
-        self._next_clock_wall = self._wall_due(min(self._clock_period, CLOCK_WALL_PERIOD))
+        self._next_clock_wall = self._wall_due(self._clock_period)
         fill_time_msg(self._clock_msg.clock, now)
         self.clock_pub.publish(self._clock_msg)
 
@@ -488,6 +507,10 @@ def main(args=None):
         rclpy.spin(node)
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
+    except Exception:
+        # Ctrl-C shuts the context down under the running step: publishing then fails.
+        if rclpy.ok():
+            raise
     finally:
         if node is not None:
             node.destroy_node()

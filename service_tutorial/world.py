@@ -207,8 +207,9 @@ def _normalise_namespace(namespace):
                 character.isalnum() or character == '_' for character in token) or (
                 not token.isascii()):
             raise WorldError(f'robot namespace {_quoted(namespace)} is not a valid ROS '
-                             f'namespace: {_quoted(token)} is not a letter or underscore '
-                             'followed by ASCII letters, digits and underscores')
+                             f'namespace: its part {_quoted(token)} must start with a letter '
+                             'or underscore and hold only ASCII letters, digits and '
+                             'underscores')
     normalised = '/' + '/'.join(tokens) if tokens else ''
     if len(normalised) > MAX_NAMESPACE_LENGTH:
         raise WorldError(f'robot namespace {_quoted(namespace)} is longer than '
@@ -327,14 +328,19 @@ class World:
         material = spec.add_material(name='ground_grid', texrepeat=[1.0, 1.0],
                                      texuniform=True, reflectance=0.1)
         material.textures[mujoco.mjtTextureRole.mjTEXROLE_RGB] = texture.name
+        spec.add_texture(
+            name='sky', type=mujoco.mjtTexture.mjTEXTURE_SKYBOX,
+            builtin=mujoco.mjtBuiltin.mjBUILTIN_GRADIENT, rgb1=[0.55, 0.68, 0.82],
+            rgb2=[0.1, 0.12, 0.15], width=256, height=1536)
+        # A plane collides everywhere; its size only sets how far the floor is drawn.
         spec.worldbody.add_geom(
-            name='ground_plane', type=mujoco.mjtGeom.mjGEOM_PLANE, size=[0.0, 0.0, 0.05],
+            name='ground_plane', type=mujoco.mjtGeom.mjGEOM_PLANE, size=[25.0, 25.0, 0.05],
             material='ground_grid', friction=[1.0, 0.005, 0.0001],
             solref=[urdf_loader.CONTACT_TIME_CONSTANT, 1.0])
         spec.worldbody.add_light(
             name='sun', type=mujoco.mjtLightType.mjLIGHT_DIRECTIONAL, pos=[0.0, 0.0, 10.0],
             dir=[0.3, 0.2, -1.0], diffuse=[0.7, 0.7, 0.7], specular=[0.2, 0.2, 0.2],
-            castshadow=True)
+            castshadow=False)
         return spec
 
     # ---------------------------------------------------------------- accessors
@@ -723,11 +729,11 @@ class World:
             self._rebuild({name: record for name, record in self._models.items()
                            if record is not culprit})
             self._removed.append(culprit.name)
-            # The rebuild made new state buffers: the step now starts from here.
-            mujoco.mj_getState(self._model, self._data, self._step_start_state, _STATE)
         else:
             self._reset_models([culprit], 'became unstable')
             culprit.recovered = True
+        # A further retake of this step starts from here, without the culprit's bad state.
+        mujoco.mj_getState(self._model, self._data, self._step_start_state, _STATE)
         return _take_steps(self._model, self._data)
 
     def _clear_bad_state_warnings(self):

@@ -435,3 +435,20 @@ def test_mesh_robot_can_be_deleted_and_spawned_again(tmp_path):
         assert world.model.nmesh == 2
         world.delete_model('meshy')
         assert world.model.nmesh == 0
+
+
+@pytest.mark.parametrize('xml, message', [
+    (robot(link('a'), link('b'), joint('j', 'a', 'b', 'fixed', '<origin xyz="0 1"/>')),
+     r"joint 'j' <origin xyz> must hold 3 numbers, not 2: '0 1'"),
+    (robot(link('a', '<visual><geometry><box size="1 1 1 1"/></geometry></visual>')),
+     r"link 'a' <box size> must hold 3 numbers, not 4: '1 1 1 1'"),
+    (robot(link('a', '<visual><geometry><mesh filename="m.obj" scale="1 2"/></geometry>'
+                     '</visual>')),
+     r"link 'a' <mesh scale> must hold 1 or 3 numbers, not 2: '1 2'"),
+    (robot(link('a', mass='1 2')), r"link 'a' <mass value> must hold 1 numbers, not 2"),
+    (robot(link('a'), link('b'), joint('j', 'a', 'b', 'fixed', f'<origin xyz="{"9" * 400}"/>')),
+     r"joint 'j' <origin xyz> contains NaN or infinity: '9{80}\.\.\.'"),
+])
+def test_numbers_of_the_wrong_count_or_size_are_refused_by_name(xml, message):
+    with pytest.raises(UrdfError, match=message):
+        load_urdf(xml)

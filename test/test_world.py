@@ -8,6 +8,7 @@ import time
 import mujoco
 import numpy as np
 import pytest
+from service_tutorial.world import MAX_WHEEL_RIM_SPEED
 from service_tutorial.world import World
 from service_tutorial.world import WorldError
 
@@ -456,3 +457,150 @@ def test_spawning_takes_milliseconds_and_stepping_costs_what_mujoco_costs(tinybo
         mujoco.mj_step(model, raw, 1000)
         raw_best = min(raw_best, time.perf_counter() - start)
     assert world_best < 1.5 * raw_best
+
+
+def block_robot(mass, size):
+    """Return a 5 kg base with a block of the given mass and size on a hinge."""
+    return ('<robot name="block"><link name="base"><inertial><mass value="5"/><inertia ixx="0.1" '
+            'iyy="0.1" izz="0.1" ixy="0" ixz="0" iyz="0"/></inertial><collision><geometry>'
+            '<box size="0.3 0.3 0.1"/></geometry></collision></link><link name="block">'
+            f'<inertial><mass value="{mass}"/><inertia ixx="{mass}" iyy="{mass}" izz="{mass}" '
+            'ixy="0" ixz="0" iyz="0"/></inertial><collision><geometry>'
+            f'<box size="{size} {size} {size}"/></geometry></collision></link>'
+            '<joint name="hinge" type="continuous"><parent link="base"/><child link="block"/>'
+            '<origin xyz="0.2 0 0"/><axis xyz="0 1 0"/></joint></robot>')
+
+
+@pytest.mark.parametrize('label, urdf', [
+    # No step of a 1e300 kg block can be computed, even at rest.
+    ('heavy', block_robot('1e300', '0.1')),
+    # A block ten thousand kilometres wide swallows tinybot and the floor.
+    ('huge', block_robot('1', '1e7')),
+])
+def test_robot_unstable_at_its_spawn_pose_is_removed_and_the_others_go_on(label, urdf, caplog):
+    plain, broken = World(), World()
+    for world in (plain, broken):
+        world.spawn_urdf_file('tinybot', TINYBOT)
+    drive([plain, broken], 0.2, 0.4, 0.2)
+    broken.spawn_urdf('block', urdf, position=(2.0, 0.0, 0.3))
+    with caplog.at_level(logging.WARNING, logger='service_tutorial.world'):
+        drive([plain, broken], 0.2, 0.4, 0.3)
+    assert broken.model_names() == ['tinybot']
+    assert broken.take_removed_models() == ['block'] and broken.take_removed_models() == []
+    messages = [record.getMessage() for record in caplog.records
+                if record.name == 'service_tutorial.world' and 'MuJoCo' not in record.message]
+    assert messages == [
+        "model 'block' became unstable; it is put back to its spawn pose at rest",
+        "model 'block' became unstable again after it was put back at its spawn pose; it is "
+        'removed from the world']
+    # tinybot went through every retaken step as if the block had never been there.
+    np.testing.assert_allclose(tinybot_state(broken), tinybot_state(plain), rtol=0, atol=1e-9)
+    broken.spawn_urdf_file('block', R2D2, position=(2.0, 0.0, 0.0))
+    assert broken.model_names() == ['tinybot', 'block']
+
+
+def test_robot_made_unstable_from_outside_gets_one_reset_per_placement(caplog):
+    world = World()
+    chain = ('<robot name="chain">' + ''.join(
+        f'<link name="l{i}"><inertial><mass value="1"/><inertia ixx="0.01" iyy="0.01" '
+        'izz="0.01" ixy="0" ixz="0" iyz="0"/></inertial><collision><geometry>'
+        '<box size="0.1 0.1 0.1"/></geometry></collision></link>' for i in range(4)) + ''.join(
+        f'<joint name="j{i}" type="continuous"><parent link="l{i - 1}"/><child link="l{i}"/>'
+        '<origin xyz="0 0.12 0" rpy="0.3 0.2 0.1"/><axis xyz="1 0 0"/></joint>'
+        for i in range(1, 4)) + '</robot>')
+    world.spawn_urdf('chain', chain, position=(0.0, 0.0, 0.5))
+    with caplog.at_level(logging.WARNING, logger='service_tutorial.world'):
+        for _ in range(2):
+            # A spin the physics cannot follow, yet below the velocity limit.
+            world.set_model_state('chain', position=(0.0, 0.0, 0.5),
+                                  orientation=(1.0, 0.0, 0.0, 0.0),
+                                  angular_velocity=(9e4, 9e4, 0.0))
+            world.step(200)
+            assert world.model_names() == ['chain']
+            np.testing.assert_allclose(world.get_model_state('chain').position[:2], [0.0, 0.0],
+                                       atol=0.3)
+    assert caplog.text.count("model 'chain' became unstable; it is put back") == 2
+    assert 'removed' not in caplog.text
+
+
+@pytest.mark.parametrize('linear_x, angular_z', [
+    (1e300, 0.0), (1.7e308, 1.7e308), (-1e308, 1e308), (0.0, -1e300), (40.0, 3.0)])
+def test_absurd_drive_commands_are_scaled_to_the_rim_speed_limit(linear_x, angular_z):
+    world = World()
+    world.spawn_urdf_file('tinybot', TINYBOT)
+    config = world.diff_drive('tinybot')
+    applied_x, applied_z = world.command_velocity('tinybot', linear_x, angular_z)
+    rim_speeds = (applied_x - applied_z * config.wheel_separation / 2.0,
+                  applied_x + applied_z * config.wheel_separation / 2.0)
+    assert max(abs(speed) for speed in rim_speeds) == pytest.approx(MAX_WHEEL_RIM_SPEED)
+    # The turn keeps its direction and, unless the numbers are absurd, its radius.
+    assert math.copysign(1.0, applied_x) == math.copysign(1.0, linear_x)
+    if max(abs(linear_x), abs(angular_z)) < 1e6:
+        assert applied_x / applied_z == pytest.approx(linear_x / angular_z)
+    world.step(500)
+    assert world.model_names() == ['tinybot']
+    assert np.isfinite(world.data.qvel).all()
+    assert np.abs(world.joint_state('tinybot')[2]).max() <= (
+        MAX_WHEEL_RIM_SPEED / config.wheel_radius * 1.01)
+
+
+def test_pose_limits_and_extreme_quaternions(world):
+    with pytest.raises(WorldError, match=r'position must stay below 1e\+08 m in magnitude: '
+                                         r'\[1e\+300, 0.0, 0.0\]'):
+        world.spawn_urdf_file('r2d2', R2D2, position=(1e300, 0.0, 0.0))
+    world.spawn_urdf_file('r2d2', R2D2, orientation=(1e300, 0.0, 0.0, 1e300))
+    np.testing.assert_allclose(world.get_model_state('r2d2').orientation,
+                               [math.sqrt(0.5), 0.0, 0.0, math.sqrt(0.5)], atol=1e-12)
+    world.set_model_state('r2d2', position=(0.0, 0.0, 0.0), orientation=(0.0, 0.0, 0.0, 1e-300))
+    np.testing.assert_allclose(world.get_model_state('r2d2').orientation, [0, 0, 0, 1],
+                               atol=1e-12)
+
+
+def test_namespaces_ros_would_refuse_are_refused(world):
+    for namespace, message in [('robôt', "its part 'robôt' must start with a letter"),
+                               ('a/2b', "its part '2b' must start with a letter"),
+                               ('n' * 201, 'longer than 200 characters')]:
+        with pytest.raises(WorldError, match=message):
+            world.spawn_urdf_file('tinybot', TINYBOT, namespace=namespace)
+    world.spawn_urdf_file('tinybot', TINYBOT, namespace='/_robots/tiny_1/')
+    assert world.namespace('tinybot') == '/_robots/tiny_1'
+
+
+def pile(count):
+    """Return a robot of count boxes on hinges, all in one place: thousands of contacts."""
+    links = ''.join(
+        f'<link name="b{index}"><inertial><mass value="1"/><inertia ixx="0.01" iyy="0.01" '
+        'izz="0.01" ixy="0" ixz="0" iyz="0"/></inertial><collision><geometry>'
+        '<box size="0.3 0.3 0.3"/></geometry></collision></link>' for index in range(count))
+    joints = ''.join(
+        f'<joint name="j{index}" type="continuous"><parent link="b0"/>'
+        f'<child link="b{index}"/><origin xyz="0 0 {0.001 * index}"/></joint>'
+        for index in range(1, count))
+    return f'<robot name="pile">{links}{joints}</robot>'
+
+
+def test_contacts_beyond_mujocos_memory_refuse_a_spawn_or_reset_the_robot(caplog):
+    plain, crowded = World(), World()
+    for world in (plain, crowded):
+        world.spawn_urdf_file('tinybot', TINYBOT)
+    drive([plain, crowded], 0.2, 0.4, 0.1)
+    before = tinybot_state(crowded)
+    with pytest.raises(WorldError, match=r"model 'heap' cannot be simulated at \[2.0, 0.0, 0.5\]"
+                                         r': mj_stackAlloc: out of memory'):
+        crowded.spawn_urdf('heap', pile(80), position=(2.0, 0.0, 0.5))
+    assert crowded.model_names() == ['tinybot']
+    np.testing.assert_array_equal(tinybot_state(crowded), before)
+
+    crowded.spawn_urdf('a', pile(40), position=(2.0, 0.0, 0.5))
+    crowded.spawn_urdf('b', pile(40), position=(-2.0, 0.0, 0.5))
+    drive([plain, crowded], 0.2, 0.4, 0.1)
+    # Two piles in one place: MuJoCo runs out of memory for their contacts within a step.
+    crowded.set_model_state('b', position=(2.0, 0.0, 0.5), orientation=(1.0, 0.0, 0.0, 0.0))
+    with caplog.at_level(logging.WARNING, logger='service_tutorial.world'):
+        drive([plain, crowded], 0.2, 0.4, 0.2)
+    assert 'MuJoCo: mj_stackAlloc: out of memory' in caplog.text
+    assert "model 'b' became unstable; it is put back to its spawn pose" in caplog.text
+    assert crowded.model_names() == ['tinybot', 'a', 'b']
+    np.testing.assert_allclose(crowded.get_model_state('b').position[:2], [-2.0, 0.0],
+                               atol=1e-3)
+    np.testing.assert_allclose(tinybot_state(crowded), tinybot_state(plain), rtol=0, atol=1e-9)
