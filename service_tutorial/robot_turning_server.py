@@ -31,6 +31,7 @@ class Turn:
         self.command = Twist()
         self.command.angular.z = angular_vel
         self.start = None
+        self.ticks_without_listener = 0
         self.done = Future()
 
 
@@ -45,9 +46,9 @@ class RobotTurningServer(Node):
             description='fastest turn accepted, in rad/s (either direction)'))
         self.declare_parameter('max_duration', 60, ParameterDescriptor(
             description='longest turn accepted, in seconds'))
-        publish_rate = self.get_parameter('publish_rate').value
-        if not publish_rate > 0.0:
-            raise ValueError(f'publish_rate must be above 0 Hz, got {publish_rate}')
+        self.publish_rate = self.get_parameter('publish_rate').value
+        if not self.publish_rate > 0.0:
+            raise ValueError(f'publish_rate must be above 0 Hz, got {self.publish_rate}')
 
         self.turns = deque()
         self.cmd_vel_pub = self.create_publisher(Twist, 'cmd_vel', 10)
@@ -59,7 +60,7 @@ class RobotTurningServer(Node):
         # Both timers run on the node's clock, so on simulation time they follow /clock.
         # They idle (cancelled) until a turn starts.
         self.publish_timer = self.create_timer(
-            1.0 / publish_rate, self.publish_callback, autostart=False)
+            1.0 / self.publish_rate, self.publish_callback, autostart=False)
         self.stop_timer = self.create_timer(1.0, self.stop_callback, autostart=False)
         self.get_logger().info('==== Robot Turning Server Started ====')
 
@@ -104,6 +105,12 @@ class RobotTurningServer(Node):
         now = self.get_clock().now()
         if now.nanoseconds == 0:
             # Simulation time has not arrived on /clock yet: start on the first timer tick.
+            return
+        if self.cmd_vel_pub.get_subscription_count() == 0 and \
+                turn.ticks_without_listener < self.publish_rate:
+            # Nobody listens on cmd_vel yet (discovery takes a moment): a command sent now
+            # would be lost and the turn would come up short. Try again for up to a second.
+            turn.ticks_without_listener += 1
             return
         self.cmd_vel_pub.publish(turn.command)
         turn.start = now

@@ -598,10 +598,11 @@ def test_a_model_that_cannot_be_simulated_is_removed_and_the_world_goes_on(ros, 
 
 @pytest.fixture(scope='class')
 def turning(rclpy_session):
-    """Give a class a free-running world and the lesson's turning server on sim time."""
+    """Give a class a real-time world and the lesson's turning server on sim time."""
     from conftest import RosHarness
     ros = RosHarness()
-    world = WorldCalls(ros)
+    # Real time: against a free-running world, message latency becomes simulated time.
+    world = WorldCalls(ros, real_time_factor=1.0)
     ros.add_node(RobotTurningServer(parameter_overrides=[
         Parameter('use_sim_time', value=True)]))
     client = ros.client_node.create_client(ControlTurningMessage, '/control_robot_angle')
