@@ -1,0 +1,1079 @@
+"""
+How close the MuJoCo world node runs to MuJoCo's own limits, measured in one run.
+
+Every figure is printed next to the limit it is compared with, and the whole report is written
+as JSON (output/benchmark.json unless --json says otherwise). What runs where:
+
+- service round trips and the spawn cost as the world grows: the world node in this process,
+  on an executor thread of its own shared with a trivial std_srvs/Trigger service, called from
+  a client node on a second executor thread (the layout of test/conftest.py);
+- free-running speed, real-time factor, start-up and turning accuracy: the installed
+  mujoco_world console script (and robot_turning_server) as separate processes, as users run
+  them, observed from this process;
+- raw physics and core operations: service_tutorial.world.World in this process, no ROS.
+
+Run it with scripts/benchmark [--quick] [--json PATH].
+"""
+
+import argparse
+import contextlib
+import ctypes
+from dataclasses import dataclass, field
+import datetime
+import fcntl
+import json
+import math
+import os
+import platform
+import shutil
+import signal
+import statistics
+import subprocess
+import sys
+import tempfile
+import threading
+import time
+
+import mujoco
+import numpy as np
+import yaml
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+DEFAULT_JSON = os.path.join(ROOT, 'output', 'benchmark.json')
+PACKAGE = 'service_tutorial'
+WORLD_SERVICES = ('spawn_urdf_model', 'delete_model', 'reset_simulation', 'reset_world',
+                  'pause_physics', 'unpause_physics', 'get_model_list', 'get_model_state',
+                  'set_model_state')
+# Fleet layout: ten robots to a row, far enough apart that their circles never touch.
+SPACING = 1.5
+# What every robot of a fleet is told on cmd_vel: circles of 0.4 m radius.
+DRIVE_LINEAR_X = 0.2
+DRIVE_ANGULAR_Z = 0.5
+# R2-D2 where the lesson spawns it: (-2, 1, 1), turned -90 degrees about z.
+LESSON_POSITION = (-2.0, 1.0, 1.0)
+LESSON_ORIENTATION = (math.sqrt(0.5), 0.0, 0.0, -math.sqrt(0.5))  # (w, x, y, z)
+# After a turn, how long (simulated s) the robot is given to come to rest before measuring.
+SETTLE_TIME = 0.5
+TURNING_TARGET_PERCENT = 2.0
+PR_SET_PDEATHSIG = 1  # prctl option, from linux/prctl.h
+
+
+class BenchmarkError(RuntimeError):
+    """A measurement could not be taken; the message says which and why."""
+
+
+@dataclass
+class Config:
+    """Counts and durations of one benchmark run."""
+
+    calls: int = 200                       # round trips per service
+    growth_counts: tuple = (1, 10, 50)     # models present for the spawn-cost rows
+    growth_calls: int = 40                 # spawns per world size
+    robot_counts: tuple = (1, 10, 50)      # tinybots for speed and real-time rows
+    speed_window: float = 2.0              # wall s per free-running measurement window
+    speed_rounds: int = 3                  # alternating raw / world node windows
+    speed_settle: float = 0.3              # wall s of driving after unpausing, before a window
+    real_time_window: float = 5.0          # wall s per real-time measurement
+    warm_up: float = 1.0                   # wall s of driving before a window starts
+    startup_runs: int = 5
+    durations: tuple = (1, 2, 5)           # s, turning grid
+    velocities: tuple = (0.1, 0.5, 1.0, 1.5)  # rad/s, turning grid
+    turning_rtf: float = 2.0               # real_time_factor of the turning grid's world
+    turning_check_rtfs: tuple = (1.0, 2.0, 5.0, 0.0)  # real_time_factor check of one turn
+    turning_check_point: tuple = (2, 1.0)  # (s, rad/s) of that check
+    log_path: str = os.path.join(tempfile.gettempdir(), 'world_benchmark-nodes.log')
+
+
+QUICK = Config(calls=5, growth_counts=(1, 2), growth_calls=3, robot_counts=(1,),
+               speed_window=0.3, speed_rounds=1, speed_settle=0.1, real_time_window=0.3,
+               warm_up=0.2, startup_runs=1,
+               durations=(1,), velocities=(0.5,), turning_rtf=4.0, turning_check_rtfs=())
+
+
+@dataclass
+class Table:
+    """One section of the report: named columns, rows of values, and what they mean."""
+
+    key: str
+    title: str
+    columns: list            # (heading, format) pairs; format '' leaves the value as text
+    rows: list = field(default_factory=list)
+    note: str = ''
+
+    def as_dict(self):
+        """Return the table as plain data for JSON."""
+        return {'title': self.title, 'columns': [heading for heading, _ in self.columns],
+                'rows': self.rows, 'note': self.note}
+
+    def render(self):
+        """Return the table as aligned text."""
+        headings = [heading for heading, _ in self.columns]
+        cells = [[_format(value, fmt) for value, (_, fmt) in zip(row, self.columns)]
+                 for row in self.rows]
+        widths = [max([len(h)] + [len(row[i]) for row in cells]) for i, h in enumerate(headings)]
+        lines = [self.title, '  '.join(h.rjust(w) for h, w in zip(headings, widths)),
+                 '  '.join('-' * w for w in widths)]
+        lines += ['  '.join(c.rjust(w) for c, w in zip(row, widths)) for row in cells]
+        if self.note:
+            lines.append(self.note)
+        return '\n'.join(lines)
+
+
+def _format(value, fmt):
+    if isinstance(value, bool):
+        return 'yes' if value else 'NO'
+    if fmt and isinstance(value, (int, float)):
+        return format(value, fmt)
+    return str(value)
+
+
+def percentiles(samples):
+    """Return p50, p95 and p99 of samples in seconds, in milliseconds."""
+    if not samples:
+        raise BenchmarkError('no samples to take percentiles of')
+    return [float(v) * 1e3 for v in np.percentile(samples, [50, 95, 99])]
+
+
+def median_ms(samples):
+    """Return the median of samples in seconds, in milliseconds."""
+    return float(statistics.median(samples)) * 1e3
+
+
+def claim_ros_domain():
+    """Hold a lock on a ROS domain id no test run or other benchmark holds (as test/conftest)."""
+    first = 1 + os.getpid() % 100
+    for offset in range(101):
+        domain_id = 1 + (first + offset) % 101
+        path = os.path.join(tempfile.gettempdir(), f'service_tutorial-ros-domain-{domain_id}.lock')
+        lock = open(path, 'w')
+        try:
+            fcntl.flock(lock, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError:
+            lock.close()
+            continue
+        return domain_id, lock
+    raise BenchmarkError('every ROS domain id 1..101 is held by another run')
+
+
+def machine():
+    """Describe the machine and software the figures come from."""
+    cpu = 'unknown'
+    try:
+        with open('/proc/cpuinfo') as cpuinfo:
+            for line in cpuinfo:
+                if line.startswith('model name'):
+                    cpu = line.split(':', 1)[1].strip()
+                    break
+    except OSError:
+        pass
+    import rclpy.utilities
+    return {
+        'nproc': os.cpu_count(),
+        'cpu': cpu,
+        'python': platform.python_version(),
+        'mujoco': mujoco.__version__,
+        'rmw': rclpy.utilities.get_rmw_implementation_identifier(),
+        'load_average_at_start': [round(v, 2) for v in os.getloadavg()],
+        'date': datetime.datetime.now().isoformat(timespec='seconds'),
+    }
+
+
+# --------------------------------------------------------------------------------- models
+
+
+def model_path(name):
+    """Return the installed URDF file of one of the package's models."""
+    from ament_index_python.packages import get_package_share_directory
+    return os.path.join(get_package_share_directory(PACKAGE), 'models', name + '.urdf')
+
+
+def read_model(name):
+    """Return the URDF text of one of the package's models."""
+    with open(model_path(name)) as model_file:
+        return model_file.read()
+
+
+def fleet_names(count):
+    """Return the model names (and namespaces) of a fleet of tinybots."""
+    return [f'bot{index}' for index in range(count)]
+
+
+def fleet_position(index):
+    """Return where the index-th tinybot of a fleet stands."""
+    return (SPACING * (index % 10), SPACING * (index // 10), 0.0)
+
+
+def fleet_parameters(count, real_time_factor):
+    """Return world node parameters that start it with a fleet of tinybots."""
+    poses = []
+    for index in range(count):
+        poses.extend(fleet_position(index)[:2] + (0.0, 0.0))
+    names = fleet_names(count)
+    return {
+        'real_time_factor': float(real_time_factor),
+        'models': ['tinybot.urdf'] * count,
+        'model_names': names,
+        'model_namespaces': list(names),
+        'model_poses': [float(v) for v in poses],
+        # The robots drive for the whole measurement on one command; a sim-time timeout
+        # would stop them between two commands sent at wall-clock pace.
+        'cmd_vel_timeout': 0.0,
+    }
+
+
+def core_fleet(count, *, driving):
+    """Return a ROS-free World holding the same fleet, driving like the node's fleet."""
+    from service_tutorial.world import World
+    world = World(cmd_vel_timeout=0.0)
+    path = model_path('tinybot')
+    for index, name in enumerate(fleet_names(count)):
+        world.spawn_urdf_file(name, path, position=fleet_position(index), namespace=name)
+        if driving:
+            world.command_velocity(name, DRIVE_LINEAR_X, DRIVE_ANGULAR_Z)
+    return world
+
+
+# ------------------------------------------------------------------------- ROS plumbing
+
+
+class Observer:
+    """A client node on an executor thread of its own: calls services, counts messages."""
+
+    def __init__(self):
+        from rclpy.executors import SingleThreadedExecutor
+        from rclpy.node import Node
+        self.node = Node('world_benchmark')
+        self._executor = SingleThreadedExecutor()
+        self._executor.add_node(self.node)
+        self._thread = threading.Thread(target=self._executor.spin, daemon=True)
+        self._thread.start()
+        self._clients = {}
+
+    def client(self, srv_type, name):
+        """Return a client of a service, made once and kept."""
+        key = (srv_type, name)
+        if key not in self._clients:
+            self._clients[key] = self.node.create_client(srv_type, name)
+        return self._clients[key]
+
+    def wait_for_service(self, srv_type, name, *, timeout=30.0, process=None):
+        """Wait until a service has a server; rclpy's own wait polls only every 0.25 s."""
+        client = self.client(srv_type, name)
+        deadline = time.monotonic() + timeout
+        while not client.service_is_ready():
+            if process is not None:
+                process.check()
+            if time.monotonic() > deadline:
+                raise BenchmarkError(f'service {name} did not appear within {timeout} s')
+            time.sleep(0.002)
+
+    def call(self, srv_type, name, request, *, timeout=30.0):
+        """Call a service and return its response, waiting on the future without polling."""
+        done = threading.Event()
+        future = self.client(srv_type, name).call_async(request)
+        future.add_done_callback(lambda _: done.set())
+        if not done.wait(timeout):
+            raise BenchmarkError(f'service {name} did not answer within {timeout} s')
+        return future.result()
+
+    def call_async(self, srv_type, name, request):
+        """Start a service call; return its future."""
+        return self.client(srv_type, name).call_async(request)
+
+    def timed_calls(self, srv_type, name, make_request, count, *, check=None):
+        """Call a service count times; return the round-trip times in seconds."""
+        samples = []
+        for index in range(count):
+            request = make_request(index)
+            start = time.perf_counter()
+            response = self.call(srv_type, name, request)
+            samples.append(time.perf_counter() - start)
+            if check is not None and not check(response):
+                raise BenchmarkError(f'{name} failed: {response}')
+        return samples
+
+    def counter(self, msg_type, topic):
+        """Count the messages arriving on a topic; return the counter and its subscription."""
+        counter = [0]
+
+        def count(_):
+            counter[0] += 1
+        subscription = self.node.create_subscription(msg_type, topic, count, 10)
+        return counter, subscription
+
+    def close(self):
+        """Stop the executor thread and destroy the node."""
+        self._executor.shutdown(timeout_sec=5.0)
+        self._thread.join(timeout=5.0)
+        self.node.destroy_node()
+
+
+def _die_with_parent():
+    """In a child process: ask Linux for SIGTERM when the benchmark dies without stopping it."""
+    try:
+        libc = ctypes.CDLL(None, use_errno=True)
+        libc.prctl(PR_SET_PDEATHSIG, signal.SIGTERM)
+    except (OSError, AttributeError):
+        pass
+
+
+class NodeProcess:
+    """One of the package's executables run as users run it, stopped with SIGINT."""
+
+    def __init__(self, executable, *, node_name=None, parameters=None, ros_args=(),
+                 log_dir=None):
+        path = shutil.which(executable)
+        if path is None:
+            raise BenchmarkError(f'executable {executable!r} is not on PATH: run '
+                                 'scripts/setup and source scripts/env.sh')
+        self.executable = executable
+        self._log_dir = log_dir or tempfile.mkdtemp(prefix='world_benchmark-')
+        args = [path]
+        if parameters or ros_args:
+            args.append('--ros-args')
+        if parameters:
+            params_path = os.path.join(self._log_dir, f'{executable}.yaml')
+            with open(params_path, 'w') as params_file:
+                yaml.safe_dump({node_name: {'ros__parameters': parameters}}, params_file)
+            args += ['--params-file', params_path]
+        args += list(ros_args)
+        self.log_path = os.path.join(self._log_dir, f'{executable}.log')
+        self._log = open(self.log_path, 'w')
+        self.process = subprocess.Popen(args, stdout=self._log, stderr=subprocess.STDOUT,
+                                        cwd=self._log_dir, preexec_fn=_die_with_parent)
+
+    def check(self):
+        """Raise BenchmarkError with the end of its log if the process has exited."""
+        if self.process.poll() is not None:
+            raise BenchmarkError(f'{self.executable} exited with status '
+                                 f'{self.process.returncode}:\n{self.log_tail()}')
+
+    def log_tail(self, lines=20):
+        """Return the last lines the process printed."""
+        self._log.flush()
+        with open(self.log_path) as log_file:
+            return ''.join(log_file.readlines()[-lines:])
+
+    def stop(self):
+        """Stop the process with Ctrl-C, or kill it if it does not go within 10 s."""
+        if self.process.poll() is None:
+            self.process.send_signal(signal.SIGINT)
+            try:
+                self.process.wait(timeout=10.0)
+            except subprocess.TimeoutExpired:
+                self.process.kill()
+                self.process.wait()
+        self._log.close()
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc_info):
+        self.stop()
+
+
+def sim_time_sample(observer, model_name):
+    """Return (simulation time, wall time) from one get_model_state round trip."""
+    from srv_interfaces.srv import GetModelState
+    start = time.monotonic()
+    response = observer.call(GetModelState, '/mujoco/get_model_state',
+                             GetModelState.Request(model_name=model_name))
+    end = time.monotonic()
+    if not response.success:
+        raise BenchmarkError(f'get_model_state {model_name}: {response.status_message}')
+    stamp = response.header.stamp
+    return stamp.sec + stamp.nanosec * 1e-9, 0.5 * (start + end), response
+
+
+def wait_for_world(observer, process, model_name):
+    """Wait until the world process answers get_model_state for model_name."""
+    from srv_interfaces.srv import GetModelState
+    observer.wait_for_service(GetModelState, '/mujoco/get_model_state', process=process)
+    sim_time_sample(observer, model_name)
+
+
+def wait_until_gone(observer, srv_type, name, *, timeout=10.0):
+    """Wait until no server offers a service any more (a stopped world left the graph)."""
+    client = observer.client(srv_type, name)
+    deadline = time.monotonic() + timeout
+    while client.service_is_ready() and time.monotonic() < deadline:
+        time.sleep(0.01)
+
+
+class Fleet:
+    """cmd_vel publishers to every robot of a fleet in a running world."""
+
+    def __init__(self, observer, count):
+        from geometry_msgs.msg import Twist
+        self._observer = observer
+        self.names = fleet_names(count)
+        self.publishers = [observer.node.create_publisher(Twist, f'/{name}/cmd_vel', 10)
+                           for name in self.names]
+        self.command = Twist()
+        self.command.linear.x = DRIVE_LINEAR_X
+        self.command.angular.z = DRIVE_ANGULAR_Z
+
+    def start(self, process, *, timeout=30.0):
+        """Wait for every robot's cmd_vel subscription, command it, and see bot0 turn."""
+        deadline = time.monotonic() + timeout
+        while any(p.get_subscription_count() == 0 for p in self.publishers):
+            process.check()
+            if time.monotonic() > deadline:
+                raise BenchmarkError('the world did not subscribe to every cmd_vel')
+            time.sleep(0.01)
+        self.publish()
+        while True:
+            _, _, state = sim_time_sample(self._observer, self.names[0])
+            if state.twist.angular.z > 0.8 * DRIVE_ANGULAR_Z:
+                return
+            if time.monotonic() > deadline:
+                raise BenchmarkError(f'{self.names[0]} did not start turning on cmd_vel')
+            self.publish()
+            time.sleep(0.02)
+
+    def publish(self):
+        """Send the driving command to every robot."""
+        for publisher in self.publishers:
+            publisher.publish(self.command)
+
+    def drive_for(self, seconds):
+        """Keep commanding the fleet (twice a second) for seconds of wall time."""
+        end = time.monotonic() + seconds
+        while True:
+            remaining = end - time.monotonic()
+            if remaining <= 0.0:
+                return
+            time.sleep(min(0.5, remaining))
+            self.publish()
+
+    def destroy(self):
+        """Remove the publishers."""
+        for publisher in self.publishers:
+            self._observer.node.destroy_publisher(publisher)
+
+
+# ---------------------------------------------------------------------- round trips
+
+
+class TrivialService:
+    """A node whose std_srvs/Trigger service does nothing: the floor of any round trip."""
+
+    def __init__(self):
+        from rclpy.node import Node
+        from std_srvs.srv import Trigger
+        self.node = Node('benchmark_trivial')
+        self.trigger_srv = self.node.create_service(Trigger, '~/trigger', self.trigger_callback)
+
+    @staticmethod
+    def trigger_callback(request, response):
+        """Answer at once."""
+        response.success = True
+        return response
+
+
+def spawn_request(index):
+    """Return a request that spawns R2-D2 where the lesson does."""
+    from geometry_msgs.msg import Pose
+    from srv_interfaces.srv import SpawnModel
+    pose = Pose()
+    pose.position.x, pose.position.y, pose.position.z = LESSON_POSITION
+    q = pose.orientation
+    q.w, q.x, q.y, q.z = LESSON_ORIENTATION
+    return SpawnModel.Request(model_name='r2d2', model_xml=read_model('r2d2'),
+                              initial_pose=pose, reference_frame='world')
+
+
+def core_round_trips(models_present, calls, *, with_reset=True):
+    """Time spawn, delete and reset_world of R2-D2 done directly on a ROS-free World."""
+    world = core_fleet(models_present, driving=False)
+    urdf = read_model('r2d2')
+    spawns, deletes, resets = [], [], []
+    for _ in range(calls):
+        start = time.perf_counter()
+        world.spawn_urdf('r2d2', urdf, position=LESSON_POSITION,
+                         orientation=LESSON_ORIENTATION)
+        middle = time.perf_counter()
+        world.delete_model('r2d2')
+        spawns.append(middle - start)
+        deletes.append(time.perf_counter() - middle)
+    if with_reset:
+        world.spawn_urdf('r2d2', urdf, position=LESSON_POSITION, orientation=LESSON_ORIENTATION)
+        for _ in range(calls):
+            start = time.perf_counter()
+            world.reset_world()
+            resets.append(time.perf_counter() - start)
+    return {'spawn': spawns, 'delete': deletes, 'reset_world': resets}
+
+
+def node_round_trips(observer, models_present, calls, *, with_reset=True):
+    """
+    Time the world node's services from a client in this process.
+
+    The world node runs in real time (its default) with models_present tinybots, on one
+    executor thread together with a trivial Trigger service. It logs at its default level; the
+    console lines go to a file (see quiet_console).
+    """
+    from rclpy.executors import SingleThreadedExecutor
+    from rclpy.parameter import Parameter
+    from service_tutorial.mujoco_world import MujocoWorld
+    from srv_interfaces.srv import DeleteModel, SpawnModel
+    from std_srvs.srv import Empty, Trigger
+
+    overrides = [Parameter(name, value=value)
+                 for name, value in fleet_parameters(models_present, 1.0).items()]
+    world = MujocoWorld(parameter_overrides=overrides)
+    trivial = TrivialService()
+    executor = SingleThreadedExecutor()
+    executor.add_node(world)
+    executor.add_node(trivial.node)
+    thread = threading.Thread(target=executor.spin, daemon=True)
+    thread.start()
+    try:
+        for srv_type, name in ((SpawnModel, '/mujoco/spawn_urdf_model'),
+                               (DeleteModel, '/mujoco/delete_model'),
+                               (Empty, '/mujoco/reset_world'),
+                               (Trigger, '/benchmark_trivial/trigger')):
+            observer.wait_for_service(srv_type, name)
+        spawns, deletes = [], []
+        for index in range(calls + 3):  # the first three warm up
+            spawn = observer.timed_calls(SpawnModel, '/mujoco/spawn_urdf_model', spawn_request,
+                                         1, check=lambda r: r.success)
+            delete = observer.timed_calls(
+                DeleteModel, '/mujoco/delete_model',
+                lambda _: DeleteModel.Request(model_name='r2d2'), 1,
+                check=lambda r: r.success)
+            if index >= 3:
+                spawns += spawn
+                deletes += delete
+        result = {'spawn': spawns, 'delete': deletes}
+        if with_reset:
+            observer.call(SpawnModel, '/mujoco/spawn_urdf_model', spawn_request(0))
+            result['reset_world'] = observer.timed_calls(
+                Empty, '/mujoco/reset_world', lambda _: Empty.Request(), calls)
+        result['trigger'] = observer.timed_calls(
+            Trigger, '/benchmark_trivial/trigger', lambda _: Trigger.Request(), calls,
+            check=lambda r: r.success)
+        return result
+    finally:
+        executor.shutdown(timeout_sec=5.0)
+        thread.join(timeout=5.0)
+        world.destroy_node()
+        trivial.node.destroy_node()
+
+
+@contextlib.contextmanager
+def quiet_console(path):
+    """Send this process's stderr (where in-process nodes log) to a file for a while."""
+    sys.stderr.flush()
+    saved = os.dup(2)
+    with open(path, 'a') as log_file:
+        os.dup2(log_file.fileno(), 2)
+    try:
+        yield
+    finally:
+        sys.stderr.flush()
+        os.dup2(saved, 2)
+        os.close(saved)
+
+
+def round_trip_table(observer, config):
+    """Spawn, delete and reset_world through the services against their floors."""
+    core = core_round_trips(1, config.calls)
+    with quiet_console(config.log_path):
+        node = node_round_trips(observer, 1, config.calls)
+    trivial_p50 = percentiles(node['trigger'])[0]
+    table = Table('round_trips', 'Service round trips, world with 1 tinybot in real time (ms)', [
+        ('operation', ''), ('calls', 'd'), ('p50', '.2f'), ('p95', '.2f'), ('p99', '.2f'),
+        ('core p50', '.2f'), ('core p99', '.2f'), ('Trigger p50', '.2f'),
+        ('limit p50', '.2f'), ('within', '')])
+    for operation, service in (('spawn', 'spawn_urdf_model (R2-D2)'),
+                               ('delete', 'delete_model (R2-D2)'),
+                               ('reset_world', 'reset_world')):
+        p50, p95, p99 = percentiles(node[operation])
+        core_p50, _, core_p99 = percentiles(core[operation])
+        limit = trivial_p50 + 2.0 * core_p50
+        table.rows.append([service, len(node[operation]), p50, p95, p99, core_p50, core_p99,
+                           trivial_p50, limit, p50 <= limit])
+    p50, p95, p99 = percentiles(node['trigger'])
+    table.rows.append(['Trigger (trivial)', len(node['trigger']), p50, p95, p99, 0.0, 0.0,
+                       trivial_p50, trivial_p50, True])
+    table.note = ('limit p50 = Trigger p50 + 2 x core p50; core = the same operation on '
+                  'World in-process, no ROS; Trigger = trivial service on the same executor')
+    return table
+
+
+def growth_table(observer, config):
+    """Measure the cost of one spawn as the world fills up with tinybots."""
+    table = Table('spawn_growth', 'Spawn R2-D2 as the world grows (ms)', [
+        ('models present', 'd'), ('calls', 'd'), ('spawn p50', '.2f'), ('core spawn p50', '.2f'),
+        ('delete p50', '.2f'), ('core delete p50', '.2f'), ('Trigger p50', '.2f'),
+        ('limit p50', '.2f'), ('within', '')])
+    for count in config.growth_counts:
+        core = core_round_trips(count, config.growth_calls, with_reset=False)
+        with quiet_console(config.log_path):
+            node = node_round_trips(observer, count, config.growth_calls, with_reset=False)
+        spawn_p50, core_spawn_p50 = median_ms(node['spawn']), median_ms(core['spawn'])
+        trivial_p50 = median_ms(node['trigger'])
+        limit = trivial_p50 + 2.0 * core_spawn_p50
+        table.rows.append([count, len(node['spawn']), spawn_p50, core_spawn_p50,
+                           median_ms(node['delete']), median_ms(core['delete']), trivial_p50,
+                           limit, spawn_p50 <= limit])
+    table.note = ('every spawn recompiles the whole model, so its cost grows with the world; '
+                  'limit as above')
+    return table
+
+
+# ------------------------------------------------------------------ speed and real time
+
+
+class RawFleet:
+    """The fleet compiled into a ROS-free World in this process, stepped by bare mj_step."""
+
+    def __init__(self, count):
+        self.world = core_fleet(count, driving=True)
+        # The world ends the wheels' acceleration ramps between steps; bare mj_step would not.
+        self.world.step(round(1.0 / self.world.timestep))
+
+    def window(self, seconds):
+        """Step for seconds of wall time; return simulated s per wall s and per CPU s."""
+        model, data = self.world.model, self.world.data
+        chunk = 50
+        steps = 0
+        start, cpu_start = time.perf_counter(), time.thread_time()
+        end = start + seconds
+        while True:
+            mujoco.mj_step(model, data, chunk)
+            steps += chunk
+            now = time.perf_counter()
+            if now >= end:
+                break
+        simulated = steps * model.opt.timestep
+        return simulated / (now - start), simulated / max(time.thread_time() - cpu_start, 1e-9)
+
+
+def process_cpu_time(pid):
+    """Return the CPU time (user and system, every thread) a process has used, in s."""
+    with open(f'/proc/{pid}/stat') as stat_file:
+        fields = stat_file.read().rsplit(')', 1)[1].split()
+    # utime and stime are fields 14 and 15 of proc(5); fields[0] here is field 3.
+    return (int(fields[11]) + int(fields[12])) / os.sysconf('SC_CLK_TCK')
+
+
+class FleetWorld:
+    """
+    mujoco_world run as a process with a driving fleet, measured window by window.
+
+    Simulation time is read from get_model_state stamps at both ends of a window (each taken
+    at the middle of its round trip), so the measurement does not depend on keeping up with
+    /clock. /clock and bot0's odom are subscribed to and counted, so the world really delivers
+    them; every robot's odometry is integrated and would be published to any subscriber.
+    """
+
+    def __init__(self, observer, count, real_time_factor):
+        from nav_msgs.msg import Odometry
+        from rosgraph_msgs.msg import Clock
+        self._observer = observer
+        self.names = fleet_names(count)
+        self.process = NodeProcess('mujoco_world', node_name='mujoco',
+                                   parameters=fleet_parameters(count, real_time_factor))
+        self.fleet = None
+        self._subscriptions = []
+        try:
+            wait_for_world(observer, self.process, self.names[0])
+            self._clock_count, clock_sub = observer.counter(Clock, '/clock')
+            self._odom_count, odom_sub = observer.counter(Odometry, f'/{self.names[0]}/odom')
+            self._subscriptions = [clock_sub, odom_sub]
+            self.fleet = Fleet(observer, count)
+            self.fleet.start(self.process)
+        except BaseException:
+            self.close()
+            raise
+
+    def window(self, seconds):
+        """Drive for seconds; return sim s per wall s and per CPU s, /clock and odom msgs/s."""
+        observer, pid = self._observer, self.process.process.pid
+        sim_start, wall_start, _ = sim_time_sample(observer, self.names[0])
+        cpu_start = process_cpu_time(pid)
+        clocks, odoms = self._clock_count[0], self._odom_count[0]
+        self.fleet.drive_for(seconds)
+        sim_end, wall_end, state = sim_time_sample(observer, self.names[0])
+        cpu = process_cpu_time(pid) - cpu_start
+        self.process.check()
+        if state.twist.angular.z < 0.8 * DRIVE_ANGULAR_Z:
+            raise BenchmarkError(f'{self.names[0]} stopped turning during the measurement')
+        simulated, wall = sim_end - sim_start, wall_end - wall_start
+        return (simulated / wall, simulated / max(cpu, 1e-9),
+                (self._clock_count[0] - clocks) / wall, (self._odom_count[0] - odoms) / wall)
+
+    def physics(self, service):
+        """Call pause_physics or unpause_physics."""
+        from std_srvs.srv import Empty
+        self._observer.call(Empty, '/mujoco/' + service, Empty.Request())
+
+    def close(self):
+        """Stop the process and wait until its services have left the graph."""
+        from srv_interfaces.srv import GetModelState
+        if self.fleet is not None:
+            self.fleet.destroy()
+        for subscription in self._subscriptions:
+            self._observer.node.destroy_subscription(subscription)
+        self.process.stop()
+        wait_until_gone(self._observer, GetModelState, '/mujoco/get_model_state')
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc_info):
+        self.close()
+
+
+def free_running_rounds(observer, count, config):
+    """
+    Alternate windows of bare mj_step (world paused) and of the free-running world node.
+
+    Adjacent windows see the same load on a shared machine; each figure is a median.
+    """
+    raw = RawFleet(count)
+    rounds = []
+    with FleetWorld(observer, count, 0.0) as world:
+        world.fleet.drive_for(config.warm_up)
+        for _ in range(config.speed_rounds):
+            world.physics('pause_physics')
+            raw_speed, raw_cpu = raw.window(config.speed_window)
+            world.physics('unpause_physics')
+            world.fleet.drive_for(config.speed_settle)
+            node_speed, node_cpu, clock_rate, odom_rate = world.window(config.speed_window)
+            rounds.append((node_speed, raw_speed, node_speed / raw_speed, node_cpu / raw_cpu,
+                           clock_rate, odom_rate))
+    return [statistics.median(column) for column in zip(*rounds)]
+
+
+def speed_tables(observer, config):
+    """Free-running speed against raw mj_step, and the real-time factor achieved."""
+    speed = Table('free_running', 'Free-running speed, real_time_factor 0 (simulated s per '
+                  'wall s)', [
+                      ('robots', 'd'), ('world node', '.1f'), ('raw mj_step', '.1f'),
+                      ('ratio', '.3f'), ('target ratio', '.1f'), ('within', ''),
+                      ('CPU-time ratio', '.3f'), ('/clock msgs/s', '.0f'),
+                      ('bot0 odom msgs/s', '.0f')])
+    real_time = Table('real_time', 'Real time, real_time_factor 1', [
+        ('robots', 'd'), ('achieved factor', '.4f'), ('error %', '.2f'), ('limit %', '.1f'),
+        ('within', ''), ('raw mj_step x real time', '.1f'), ('world CPU %', '.0f'),
+        ('/clock msgs/s', '.0f'), ('bot0 odom msgs/s', '.0f')])
+    for count in config.robot_counts:
+        node, raw, ratio, cpu_ratio, clock_rate, odom_rate = free_running_rounds(
+            observer, count, config)
+        target = 0.7 if count == 1 else 0.8
+        speed.rows.append([count, node, raw, ratio, target, ratio >= target, cpu_ratio,
+                           clock_rate, odom_rate])
+        with FleetWorld(observer, count, 1.0) as world:
+            world.fleet.drive_for(config.warm_up)
+            factor, per_cpu_second, clock_rate, odom_rate = world.window(
+                config.real_time_window)
+        error = 100.0 * (factor - 1.0)
+        real_time.rows.append([count, factor, error, 1.0, abs(error) <= 1.0, raw,
+                               100.0 * factor / per_cpu_second, clock_rate, odom_rate])
+    speed.note = ('world node: the mujoco_world executable in its own process, every robot '
+                  'driving on /cmd_vel, /clock and bot0/odom subscribed to here (msgs/s: what '
+                  'arrived per wall s). raw mj_step: the same fleet compiled in this process, '
+                  'no ROS, stepped while the world node is paused. Medians of '
+                  f'{config.speed_rounds} alternating rounds of {config.speed_window} s. '
+                  'CPU-time ratio: the same per CPU second used (every thread of the world '
+                  'process), which other load on a shared machine skews less. Target ratio '
+                  '0.7 with 1 robot, 0.8 with more.')
+    real_time.note = ('achieved factor over the window from get_model_state stamps; raw '
+                      'mj_step x real time is how much faster than real time the physics '
+                      'alone could run (from the free-running rows); world CPU %: CPU time '
+                      'of the world process per wall second')
+    return speed, real_time
+
+
+# ------------------------------------------------------------------------ start-up
+
+
+def startup_table(observer, config):
+    """Process start of mujoco_world until every /mujoco/ service answers."""
+    from srv_interfaces.srv import DeleteModel, GetModelList, GetModelState, SetModelState
+    from srv_interfaces.srv import SpawnModel
+    from std_srvs.srv import Empty
+    types = {'spawn_urdf_model': SpawnModel, 'delete_model': DeleteModel,
+             'get_model_list': GetModelList, 'get_model_state': GetModelState,
+             'set_model_state': SetModelState}
+    services = [(types.get(name, Empty), '/mujoco/' + name) for name in WORLD_SERVICES]
+    for srv_type, name in services:
+        observer.client(srv_type, name)  # discovery starts before the process does
+    times, cpu_times = [], []
+    for _ in range(config.startup_runs):
+        wait_until_gone(observer, GetModelList, '/mujoco/get_model_list')
+        start = time.monotonic()
+        with NodeProcess('mujoco_world') as process:
+            for srv_type, name in services:
+                observer.wait_for_service(srv_type, name, process=process)
+            response = observer.call(GetModelList, '/mujoco/get_model_list',
+                                     GetModelList.Request())
+            times.append(time.monotonic() - start)
+            cpu_times.append(process_cpu_time(process.process.pid))
+            if list(response.model_names) != ['tinybot']:
+                raise BenchmarkError(f'unexpected start-up models {response.model_names}')
+    wait_until_gone(observer, GetModelList, '/mujoco/get_model_list')
+    imports = []
+    for _ in range(max(1, min(3, config.startup_runs))):
+        start = time.monotonic()
+        subprocess.run([sys.executable, '-c', 'import service_tutorial.mujoco_world'],
+                       check=True)
+        imports.append(time.monotonic() - start)
+    table = Table('startup', 'Start-up: mujoco_world process start to every /mujoco/ service '
+                  'answering (s)', [
+                      ('runs', 'd'), ('p50', '.3f'), ('max', '.3f'), ('CPU s p50', '.3f'),
+                      ('imports alone p50', '.3f'), ('target', '.1f'), ('within', '')])
+    p50 = statistics.median(times)
+    table.rows.append([len(times), p50, max(times), statistics.median(cpu_times),
+                       statistics.median(imports), 1.5, p50 < 1.5])
+    table.note = ('CPU s: CPU time the world process had used when ready; imports alone: wall '
+                  'time of a fresh interpreter importing service_tutorial.mujoco_world (rclpy, '
+                  'MuJoCo, yourdfpy and trimesh), the floor of any start-up')
+    return table
+
+
+# ------------------------------------------------------------------------ turning
+
+
+def yaw_of(orientation):
+    """Return the yaw of a geometry_msgs/Quaternion."""
+    q = orientation
+    return math.atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z))
+
+
+class YawTracker:
+    """Unwraps yaw samples into the total angle turned; samples must be under pi apart."""
+
+    def __init__(self, yaw):
+        self.last = yaw
+        self.turned = 0.0
+
+    def add(self, yaw):
+        """Add a sample; return the total turned so far."""
+        step = math.remainder(yaw - self.last, 2.0 * math.pi)
+        self.turned += step
+        self.last = yaw
+        return self.turned
+
+
+def measure_turn(observer, duration, angular_vel):
+    """Turn tinybot through /control_robot_angle; return the angle it really turned."""
+    from srv_interfaces.srv import ControlTurningMessage
+    _, _, state = sim_time_sample(observer, 'tinybot')
+    tracker = YawTracker(yaw_of(state.pose.orientation))
+    future = observer.call_async(ControlTurningMessage, '/control_robot_angle',
+                                 ControlTurningMessage.Request(time_duration=duration,
+                                                               angular_vel=angular_vel))
+    deadline = time.monotonic() + 60.0 + 10.0 * duration
+    while not future.done():
+        if time.monotonic() > deadline:
+            raise BenchmarkError('/control_robot_angle did not answer')
+        _, _, state = sim_time_sample(observer, 'tinybot')
+        tracker.add(yaw_of(state.pose.orientation))
+        time.sleep(0.002)
+    if not future.result().success:
+        raise BenchmarkError(f'/control_robot_angle refused {duration} s at {angular_vel} rad/s')
+    end, _, _ = sim_time_sample(observer, 'tinybot')
+    while True:
+        now, _, state = sim_time_sample(observer, 'tinybot')
+        tracker.add(yaw_of(state.pose.orientation))
+        if now >= end + SETTLE_TIME and abs(state.twist.angular.z) < 1e-3:
+            return tracker.turned
+        if time.monotonic() > deadline:
+            raise BenchmarkError('tinybot did not come to rest after its turn')
+        time.sleep(0.005)
+
+
+def turning_world(real_time_factor):
+    """Start the default world and the turning server on simulation time."""
+    world = NodeProcess('mujoco_world', node_name='mujoco',
+                        parameters={'real_time_factor': float(real_time_factor)})
+    try:
+        server = NodeProcess('robot_turning_server', ros_args=['-p', 'use_sim_time:=true'])
+    except BaseException:
+        world.stop()
+        raise
+    return world, server
+
+
+def run_turns(observer, real_time_factor, points):
+    """Run a list of (duration, angular_vel) turns in one fresh world; return the rows."""
+    from srv_interfaces.srv import ControlTurningMessage, GetModelState
+    world, server = turning_world(real_time_factor)
+    rows = []
+    try:
+        wait_for_world(observer, world, 'tinybot')
+        observer.wait_for_service(ControlTurningMessage, '/control_robot_angle', process=server)
+        # Not measured: the two processes have just started, and a first command can go out
+        # before the server's cmd_vel publisher and the world's subscription have met.
+        measure_turn(observer, 1, 0.5)
+        for duration, angular_vel in points:
+            commanded = duration * angular_vel
+            measured = measure_turn(observer, duration, angular_vel)
+            error = 100.0 * (measured - commanded) / commanded
+            rows.append([real_time_factor, duration, angular_vel, commanded, measured, error,
+                         TURNING_TARGET_PERCENT, abs(error) < TURNING_TARGET_PERCENT])
+            world.check()
+            server.check()
+    finally:
+        server.stop()
+        world.stop()
+    wait_until_gone(observer, GetModelState, '/mujoco/get_model_state')
+    wait_until_gone(observer, ControlTurningMessage, '/control_robot_angle')
+    return rows
+
+
+def turning_tables(observer, config):
+    """Measure the turning grid at one real_time_factor, and one turn at several."""
+    columns = [('real_time_factor', '.0f'), ('duration s', 'd'), ('angular_vel rad/s', '.1f'),
+               ('commanded rad', '.3f'), ('measured rad', '.4f'), ('error %', '.2f'),
+               ('limit %', '.1f'), ('within', '')]
+    grid = Table('turning', '/control_robot_angle accuracy (robot_turning_server, '
+                 'use_sim_time)', list(columns))
+    grid.rows = run_turns(observer, config.turning_rtf, [
+        (duration, velocity) for duration in config.durations
+        for velocity in config.velocities])
+    grid.note = ('measured: unwrapped yaw of tinybot from /mujoco/get_model_state (ground '
+                 'truth), sampled during the turn and after it came to rest')
+    tables = [grid]
+    if config.turning_check_rtfs:
+        check = Table('turning_check', 'One turn at several real_time_factors (0: '
+                      'free-running)', list(columns))
+        for factor in config.turning_check_rtfs:
+            check.rows += run_turns(observer, factor, [config.turning_check_point])
+        check.note = ('the turning server stops the robot on a /clock-driven timer; the '
+                      'world runs on while the stop travels, so the error grows with the '
+                      'factor')
+        tables.append(check)
+    return tables
+
+
+# ------------------------------------------------------------------------ report
+
+
+def targets(tables):
+    """Return the targets of issue 5 with their measured values and whether they hold."""
+    rows = []
+    by_key = {table.key: table for table in tables}
+    if 'round_trips' in by_key:
+        spawn = by_key['round_trips'].rows[0]
+        rows.append(['spawn p50 <= Trigger p50 + 2 x core spawn p50 (ms)', spawn[2], spawn[8],
+                     spawn[9]])
+    if 'free_running' in by_key:
+        for row in by_key['free_running'].rows:
+            rows.append([f'free-running ratio to raw mj_step, {row[0]} robot(s)', row[3],
+                         row[4], row[5]])
+    if 'real_time' in by_key:
+        for row in by_key['real_time'].rows:
+            rows.append([f'real-time factor error %, {row[0]} robot(s)', abs(row[2]), row[3],
+                         row[4]])
+    if 'startup' in by_key:
+        row = by_key['startup'].rows[0]
+        rows.append(['start-up to services ready p50 (s)', row[1], row[5], row[6]])
+    if 'turning' in by_key:
+        worst = max(abs(row[5]) for row in by_key['turning'].rows)
+        rows.append(['worst turning error % on the grid', worst, TURNING_TARGET_PERCENT,
+                     worst < TURNING_TARGET_PERCENT])
+    return Table('targets', 'Targets', [('target', ''), ('measured', '.3f'), ('limit', '.3f'),
+                                        ('holds', '')], rows)
+
+
+SECTIONS = ('round_trips', 'spawn_growth', 'speed', 'startup', 'turning')
+
+
+def run(config, *, sections=SECTIONS, report=print):
+    """Measure the selected sections; rclpy must be initialised. Return the tables."""
+    observer = Observer()
+    tables = []
+
+    def add(*new_tables):
+        for table in new_tables:
+            tables.append(table)
+            report(table.render() + '\n')
+    try:
+        if 'round_trips' in sections:
+            add(round_trip_table(observer, config))
+        if 'spawn_growth' in sections:
+            add(growth_table(observer, config))
+        if 'speed' in sections:
+            add(*speed_tables(observer, config))
+        if 'startup' in sections:
+            add(startup_table(observer, config))
+        if 'turning' in sections:
+            add(*turning_tables(observer, config))
+    finally:
+        observer.close()
+    add(targets(tables))
+    return tables
+
+
+def write_json(path, tables, config, info):
+    """Write the report as JSON, with the machine and the run's configuration."""
+    os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)
+    document = {'machine': info, 'config': config.__dict__,
+                'tables': {table.key: table.as_dict() for table in tables}}
+    with open(path, 'w') as json_file:
+        json.dump(document, json_file, indent=2)
+        json_file.write('\n')
+
+
+def parse_args(argv):
+    """Read the command line."""
+    parser = argparse.ArgumentParser(description=__doc__.strip().splitlines()[0])
+    parser.add_argument('--quick', action='store_true',
+                        help='tiny counts and windows: checks that everything runs')
+    parser.add_argument('--json', default=DEFAULT_JSON, metavar='PATH',
+                        help=f'where to write the report (default {DEFAULT_JSON})')
+    parser.add_argument('--sections', default=','.join(SECTIONS),
+                        help=f'comma-separated subset of {",".join(SECTIONS)}')
+    parser.add_argument('--calls', type=int, help='round trips per service (default 200)')
+    parser.add_argument('--robots', help='robot counts for speed rows, e.g. 1,10,50')
+    parser.add_argument('--turning-rtf', type=float,
+                        help='real_time_factor of the turning grid (default 2)')
+    args = parser.parse_args(argv)
+    sections = tuple(s.strip() for s in args.sections.split(',') if s.strip())
+    unknown = sorted(set(sections) - set(SECTIONS))
+    if unknown:
+        parser.error(f'unknown section(s) {", ".join(unknown)}; choose from '
+                     f'{", ".join(SECTIONS)}')
+    config = Config(**QUICK.__dict__) if args.quick else Config()
+    if args.calls is not None:
+        config.calls = args.calls
+    if args.robots:
+        config.robot_counts = tuple(int(v) for v in args.robots.split(','))
+    if args.turning_rtf is not None:
+        config.turning_rtf = args.turning_rtf
+    return config, sections, args.json
+
+
+def main(argv=None):
+    """Run the benchmark on a ROS domain of its own and print and save the report."""
+    config, sections, json_path = parse_args(sys.argv[1:] if argv is None else argv)
+    domain_id, _domain_lock = claim_ros_domain()
+    os.environ['ROS_DOMAIN_ID'] = str(domain_id)
+    os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
+    os.environ.pop('ROS_LOCALHOST_ONLY', None)
+    import rclpy
+    rclpy.init()
+    try:
+        info = machine()
+        print(f"machine: {info['nproc']} x {info['cpu']}, Python {info['python']}, MuJoCo "
+              f"{info['mujoco']}, {info['rmw']}, load {info['load_average_at_start']}\n")
+        start = time.monotonic()
+        tables = run(config, sections=sections)
+        write_json(json_path, tables, config, info)
+        print(f'took {time.monotonic() - start:.0f} s; written to {json_path}; the in-process '
+              f'nodes logged to {config.log_path}')
+    except BenchmarkError as error:
+        print(f'benchmark failed: {error}', file=sys.stderr)
+        return 1
+    finally:
+        rclpy.try_shutdown()
+    return 0
+
+
+if __name__ == '__main__':
+    sys.exit(main())
