@@ -38,6 +38,9 @@ def _claim_ros_domain():
 # Set before rclpy (and any node started by a test) reads the environment.
 os.environ['ROS_DOMAIN_ID'] = str(_claim_ros_domain())
 os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
+# Messages check the types of the values written into them: an int in a float64 field would
+# otherwise be serialised as garbage on some Python versions (seen with 3.12).
+os.environ['ROS_PYTHON_CHECK_FIELDS'] = '1'
 os.environ.pop('ROS_LOCALHOST_ONLY', None)
 
 

@@ -66,16 +66,16 @@ def mesh_robot(filename):
 
 def pose(x=0.0, y=0.0, z=0.5, w=1.0, qx=0.0, qy=0.0, qz=0.0):
     msg = Pose()
-    msg.position.x, msg.position.y, msg.position.z = x, y, z
+    msg.position.x, msg.position.y, msg.position.z = float(x), float(y), float(z)
     q = msg.orientation
-    q.w, q.x, q.y, q.z = w, qx, qy, qz
+    q.w, q.x, q.y, q.z = float(w), float(qx), float(qy), float(qz)
     return msg
 
 
 def twist(linear=(0.0, 0.0, 0.0), angular=(0.0, 0.0, 0.0)):
     msg = Twist()
-    msg.linear.x, msg.linear.y, msg.linear.z = linear
-    msg.angular.x, msg.angular.y, msg.angular.z = angular
+    msg.linear.x, msg.linear.y, msg.linear.z = (float(v) for v in linear)
+    msg.angular.x, msg.angular.y, msg.angular.z = (float(v) for v in angular)
     return msg
 
 
