@@ -20,7 +20,6 @@ import contextlib
 import ctypes
 from dataclasses import dataclass, field
 import datetime
-import fcntl
 import json
 import math
 import os
@@ -36,6 +35,7 @@ import time
 
 import mujoco
 import numpy as np
+from service_tutorial.ros_isolation import isolate_ros_graph
 import yaml
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
@@ -137,22 +137,6 @@ def percentiles(samples):
 def median_ms(samples):
     """Return the median of samples in seconds, in milliseconds."""
     return float(statistics.median(samples)) * 1e3
-
-
-def claim_ros_domain():
-    """Hold a lock on a ROS domain id no test run or other benchmark holds (as test/conftest)."""
-    first = 1 + os.getpid() % 100
-    for offset in range(101):
-        domain_id = 1 + (first + offset) % 101
-        path = os.path.join(tempfile.gettempdir(), f'service_tutorial-ros-domain-{domain_id}.lock')
-        lock = open(path, 'w')
-        try:
-            fcntl.flock(lock, fcntl.LOCK_EX | fcntl.LOCK_NB)
-        except OSError:
-            lock.close()
-            continue
-        return domain_id, lock
-    raise BenchmarkError('every ROS domain id 1..101 is held by another run')
 
 
 def machine():
@@ -1052,10 +1036,7 @@ def parse_args(argv):
 def main(argv=None):
     """Run the benchmark on a ROS domain of its own and print and save the report."""
     config, sections, json_path = parse_args(sys.argv[1:] if argv is None else argv)
-    domain_id, _domain_lock = claim_ros_domain()
-    os.environ['ROS_DOMAIN_ID'] = str(domain_id)
-    os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
-    os.environ.pop('ROS_LOCALHOST_ONLY', None)
+    isolate_ros_graph()
     import rclpy
     rclpy.init()
     try:

@@ -21,7 +21,6 @@ scripts/stress [--seconds S] [--cycles N] [--clients N] [--real-time-factor F].
 
 import argparse
 import collections
-import fcntl
 import math
 import os
 import random
@@ -35,6 +34,8 @@ import textwrap
 import threading
 import time
 
+from service_tutorial.ros_isolation import isolate_ros_graph
+
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 CALL_TIMEOUT = 10.0
 # Cycles whose time and memory are compared, at the start and at the end of the cycle phase.
@@ -44,20 +45,6 @@ MIXED_OPERATIONS = (('spawn', 4), ('delete', 3), ('get_state', 4), ('set_state',
                     ('bad_request', 2), ('list_models', 2), ('reset_world', 1))
 # Models one mixed-phase client keeps at most; beyond, its spawns turn into deletes.
 MAX_OWNED = 6
-
-
-def claim_ros_domain():
-    """Hold a lock file for a free ROS domain id, shared with the test suite's scheme."""
-    for domain_id in random.sample(range(1, 102), 101):
-        path = os.path.join(tempfile.gettempdir(), f'service_tutorial-ros-domain-{domain_id}.lock')
-        lock = open(path, 'w')
-        try:
-            fcntl.flock(lock, fcntl.LOCK_EX | fcntl.LOCK_NB)
-        except OSError:
-            lock.close()
-            continue
-        return domain_id, lock
-    raise RuntimeError('every ROS domain id 1..101 is held by another run')
 
 
 def world_command(real_time_factor):
@@ -522,10 +509,7 @@ def parse_arguments(argv):
 def main(argv=None):
     """Run every phase against a world process of its own; return the exit status."""
     arguments = parse_arguments(argv)
-    domain_id, domain_lock = claim_ros_domain()
-    os.environ['ROS_DOMAIN_ID'] = str(domain_id)
-    os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
-    os.environ.pop('ROS_LOCALHOST_ONLY', None)
+    domain_id = isolate_ros_graph()
     import rclpy
     log = tempfile.NamedTemporaryFile('w+', prefix='world_stress-', suffix='.log', delete=False)
     world = subprocess.Popen(world_command(arguments.real_time_factor), stdout=log,
@@ -568,7 +552,6 @@ def main(argv=None):
             world.kill()
             world.wait()
         rclpy.try_shutdown()
-        domain_lock.close()
     log.seek(0)
     internal = [line.strip() for line in log if 'internal error' in line or 'Traceback' in line]
     if internal:

@@ -6,42 +6,18 @@ discovery on localhost, so parallel runs never see each other's nodes. rclpy is 
 once per session, only when a test asks for it; the core tests never touch ROS.
 """
 
-import fcntl
 import os
-import tempfile
 import threading
 import time
 
 import pytest
+from service_tutorial.ros_isolation import isolate_ros_graph
 
-_DOMAIN_LOCK = None
-
-
-def _claim_ros_domain():
-    """Hold a lock file for a free ROS domain id for as long as this process lives."""
-    global _DOMAIN_LOCK
-    first = 1 + os.getpid() % 100
-    for offset in range(101):
-        domain_id = 1 + (first + offset) % 101
-        path = os.path.join(tempfile.gettempdir(), f'service_tutorial-ros-domain-{domain_id}.lock')
-        lock = open(path, 'w')
-        try:
-            fcntl.flock(lock, fcntl.LOCK_EX | fcntl.LOCK_NB)
-        except OSError:
-            lock.close()
-            continue
-        _DOMAIN_LOCK = lock
-        return domain_id
-    raise RuntimeError('every ROS domain id 1..101 is held by another test run')
-
-
-# Set before rclpy (and any node started by a test) reads the environment.
-os.environ['ROS_DOMAIN_ID'] = str(_claim_ros_domain())
-os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
+# Before rclpy (and any node a test starts) reads the environment.
+isolate_ros_graph()
 # Messages check the types of the values written into them: an int in a float64 field would
 # otherwise be serialised as garbage on some Python versions (seen with 3.12).
 os.environ['ROS_PYTHON_CHECK_FIELDS'] = '1'
-os.environ.pop('ROS_LOCALHOST_ONLY', None)
 
 
 def pytest_configure(config):
