@@ -35,6 +35,21 @@ def yaw_quaternion(yaw):
     return quaternion
 
 
+def matrix_quaternion(matrix):
+    """Return the (w, x, y, z) quaternion of a 3x3 rotation matrix."""
+    quaternion = np.zeros(4)
+    mujoco.mju_mat2Quat(quaternion, np.ascontiguousarray(matrix, dtype=float).ravel())
+    return quaternion
+
+
+def rotate_tensor(quaternion, tensor):
+    """Return a 3x3 tensor (an inertia) given in a frame turned by quaternion, in its parent."""
+    rotation = np.zeros(9)
+    mujoco.mju_quat2Mat(rotation, np.asarray(quaternion, float))
+    rotation = rotation.reshape(3, 3)
+    return rotation @ np.asarray(tensor, float) @ rotation.T
+
+
 def rotate(quaternion, vector):
     """Return vector turned by quaternion: from a frame's axes into its parent's."""
     result = np.zeros(3)

@@ -1,20 +1,20 @@
 """
 Plugins attached to a model by a Gazebo <plugin> block, one module per kind, free of ROS.
 
-A plugin module names the Gazebo plugin it stands in for in KINDS below and defines PLUGIN, a
-Plugin subclass. Loading a URDF calls PLUGIN.configure() on the block and PLUGIN.build() on the
-robot's spec; spawning the robot makes one PLUGIN(config, block) per block, and the world's
-step calls it through the methods of Plugin. Adding a kind touches this table and a new module,
-not the world.
+A plugin module is named in KINDS below, by the Gazebo plugin it stands in for, and defines
+PLUGIN, a Plugin subclass. Loading a URDF calls PLUGIN.configure() on the block and
+PLUGIN.build() on the robot's spec; spawning the robot makes one PLUGIN(config, block) per
+block, and the world's step calls it through the methods of Plugin. Adding a kind touches this
+table and a new module, not the world.
 """
 
 from dataclasses import dataclass
 import importlib
 import math
 
-# Gazebo plugin name (as it appears in the <plugin filename>) -> module in this package.
+# Gazebo plugin name (as it appears in the <plugin filename>) -> module that stands in for it.
 KINDS = {
-    'gazebo_ros_diff_drive': 'diff_drive',
+    'gazebo_ros_diff_drive': 'service_tutorial.sim.plugins.diff_drive',
 }
 
 
@@ -25,7 +25,7 @@ def kind_of(filename):
 
 def plugin_class(kind):
     """Return the Plugin subclass that stands in for a registered Gazebo plugin kind."""
-    return importlib.import_module(f'{__name__}.{KINDS[kind]}').PLUGIN
+    return importlib.import_module(KINDS[kind]).PLUGIN
 
 
 def next_event(models):

@@ -287,10 +287,7 @@ def add_wheel_actuators(spec, config, timestep):
 def _inertia_about_axis(body, axis):
     """Return the moment of inertia of a body about a unit axis through its origin."""
     axis = np.asarray(axis, dtype=float)
-    rotation = np.zeros(9)
-    mujoco.mju_quat2Mat(rotation, np.asarray(body.iquat, dtype=float))
-    rotation = rotation.reshape(3, 3)
-    tensor = rotation @ np.diag(np.asarray(body.inertia, dtype=float)) @ rotation.T
+    tensor = frames.rotate_tensor(body.iquat, np.diag(np.asarray(body.inertia, dtype=float)))
     offset = np.asarray(body.ipos, dtype=float)
     return float(axis @ tensor @ axis + body.mass * (offset @ offset - (offset @ axis) ** 2))
 

@@ -13,6 +13,7 @@ import math
 from lxml import etree
 import mujoco
 import numpy as np
+from service_tutorial.sim import frames
 from service_tutorial.sim import plugins
 from service_tutorial.sim.urdf.gazebo import read_link_friction
 from service_tutorial.sim.urdf.gazebo import read_plugin_blocks
@@ -119,9 +120,7 @@ def _pose(matrix, what):
     matrix = np.asarray(matrix, dtype=float)
     if not np.all(np.isfinite(matrix)):
         raise UrdfError(f'{what} origin contains NaN or infinity')
-    quaternion = np.zeros(4)
-    mujoco.mju_mat2Quat(quaternion, np.ascontiguousarray(matrix[:3, :3]).ravel())
-    return matrix[:3, 3].copy(), quaternion
+    return matrix[:3, 3].copy(), frames.matrix_quaternion(matrix[:3, :3])
 
 
 class _SpecBuilder:
@@ -287,18 +286,13 @@ class _SpecBuilder:
                             dtype=float)
         if not np.all(np.isfinite(tensor)):
             raise UrdfError(f"link '{link.name}' inertia contains NaN or infinity")
-        rotation = np.zeros(9)
-        mujoco.mju_quat2Mat(rotation, orientation)
-        rotation = rotation.reshape(3, 3)
-        tensor = rotation @ tensor @ rotation.T
-        moments, axes = np.linalg.eigh(tensor)
+        moments, axes = np.linalg.eigh(frames.rotate_tensor(orientation, tensor))
         if moments[0] <= 0.0:
             raise UrdfError(f"link '{link.name}' inertia is not positive definite "
                             f'(principal moments {moments.tolist()})')
         if np.linalg.det(axes) < 0.0:
             axes[:, 2] = -axes[:, 2]
-        principal = np.zeros(4)
-        mujoco.mju_mat2Quat(principal, np.ascontiguousarray(axes).ravel())
+        principal = frames.matrix_quaternion(axes)
         body.mass = mass
         body.ipos = position
         body.iquat = principal

@@ -61,20 +61,10 @@ def check_structure(root):
         raise UrdfError('model_xml has no <link>')
     link_names = set()
     for link in links:
-        name = link.get('name')
-        if not name:
-            raise UrdfError('a <link> has no name attribute')
-        if name in link_names:
-            raise UrdfError(f"link '{name}' is defined twice")
-        link_names.add(name)
+        _new_name(link, link_names)
     joint_names = set()
     for joint in root.findall('joint'):
-        name = joint.get('name')
-        if not name:
-            raise UrdfError('a <joint> has no name attribute')
-        if name in joint_names:
-            raise UrdfError(f"joint '{name}' is defined twice")
-        joint_names.add(name)
+        name = _new_name(joint, joint_names)
         for end in ('parent', 'child'):
             element = joint.find(end)
             if element is None or not element.get('link'):
@@ -90,6 +80,17 @@ def check_structure(root):
         for geometry in link.iter('geometry'):
             if len(geometry) == 0:
                 raise UrdfError(f"link '{link.get('name')}' has an empty <geometry>")
+
+
+def _new_name(element, names):
+    """Return the name of a <link> or <joint>, refusing none and one already in names."""
+    name = element.get('name')
+    if not name:
+        raise UrdfError(f'a <{element.tag}> has no name attribute')
+    if name in names:
+        raise UrdfError(f"{element.tag} '{name}' is defined twice")
+    names.add(name)
+    return name
 
 
 # Attributes that hold numbers, by element, and how many numbers each may hold.
