@@ -25,9 +25,14 @@ class Model:
     """
 
     def __init__(self, name, description, position, orientation):
-        """Describe a model to be attached at a world pose; it has no MuJoCo elements yet."""
+        """Describe a model whose URDF frame goes to a world pose; it has no elements yet."""
         self.name = name
         self.description = description
+        if description.anchored:
+            # The root link sits where the URDF's joint to the world link puts it.
+            position, orientation = frames.compose(position, orientation,
+                                                   description.root_position,
+                                                   description.root_orientation)
         self.spawn_position = np.array(position, dtype=float)
         self.spawn_orientation = np.array(orientation, dtype=float)
         self.frame = None  # the frame of the world's spec the model's root is attached to

@@ -44,6 +44,12 @@ def _route_mujoco_messages():
     config.set()
 
 
+def _compile_error(error):
+    """Return a MuJoCo compiler error as one line, without its 'Error: ' prefix."""
+    reason = '; '.join(line.strip() for line in str(error).splitlines() if line.strip())
+    return reason[len('Error: '):] if reason.startswith('Error: ') else reason
+
+
 def _saved_state(models, data):
     """Return a copy of each model's share of the integration state, by model name."""
     return {name: model.saved_state(data) for name, model in models.items()}
@@ -56,7 +62,12 @@ def _restore_state(models, data, saved):
 
 
 class World:
-    """A MuJoCo world with a ground plane into which URDF robots are spawned and deleted."""
+    """
+    A MuJoCo world with a ground plane into which URDF robots are spawned and deleted.
+
+    rebuild(), forward(), state_changed(), schedule_events() and body_state() are there for
+    the core's own pieces, recovery and plugins; nodes use the rest.
+    """
 
     def __init__(self, *, timestep=0.002, gravity=(0.0, 0.0, -9.81), cmd_vel_timeout=0.5,
                  package_resolver=None):
@@ -171,11 +182,6 @@ class World:
                                     timestep=self._timestep)
         except UrdfError as error:
             raise WorldError(str(error)) from None
-        if description.anchored:
-            world_position, world_orientation = frames.compose(
-                world_position, world_orientation, description.root_position,
-                description.root_orientation)
-
         model = Model(name, description, world_position, world_orientation)
         # MuJoCo carries positions, velocities and controls over a recompile, not the rest.
         saved = _saved_state(self._models, self._data)
@@ -185,8 +191,7 @@ class World:
         except Exception as error:
             # The live spec still holds the half-attached robot: build it afresh without it.
             self.rebuild(self._models)
-            reason = '; '.join(line.strip() for line in str(error).splitlines() if line.strip())
-            reason = reason[len('Error: '):] if reason.startswith('Error: ') else reason
+            reason = _compile_error(error)
             raise WorldError(f"model '{name}' does not compile: {reason}") from None
         self._model, self._data = mj_model, data
         self._models[name] = model
@@ -196,11 +201,13 @@ class World:
         failure = self.forward()
         if failure is not None:
             self.rebuild({other: kept for other, kept in self._models.items() if other != name})
-            raise WorldError(f"model '{name}' cannot be simulated at {world_position.tolist()}: "
-                             f'{failure}; does it overlap other models?')
+            raise WorldError(f"model '{name}' cannot be simulated at "
+                             f'{model.spawn_position.tolist()}: {failure}; does it overlap '
+                             'other models?')
         model.reset_plugins()
         self.schedule_events()
-        _logger.info("spawned model '%s' at %s", name, np.round(world_position, 4).tolist())
+        _logger.info("spawned model '%s' at %s", name,
+                     np.round(model.spawn_position, 4).tolist())
 
     def spawn_urdf_file(self, name, path, **kwargs):
         """Add a robot from a URDF file; relative mesh paths resolve against its folder."""
@@ -387,9 +394,8 @@ class World:
         """
         Command a diff-drive robot's body twist; it lapses after cmd_vel_timeout seconds.
 
-        A command that would turn a wheel rim faster than MAX_WHEEL_RIM_SPEED (of the
-        diff-drive plugin) is scaled down to that speed, keeping the radius of the turn.
-        Return the (linear_x, angular_z) that is carried out.
+        Return the (linear_x, angular_z) carried out: DiffDrive.command() scales a command
+        that would turn a wheel rim faster than MAX_WHEEL_RIM_SPEED down to that speed.
         """
         drive = self._diff_drive(name)
         linear_x = validation.finite_number(linear_x, 'linear_x')

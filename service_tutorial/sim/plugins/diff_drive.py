@@ -315,8 +315,15 @@ class DiffDrive(Plugin):
         self.origin_position = np.zeros(3)
         self.origin_orientation = np.array(frames.IDENTITY_QUATERNION)
 
-    configure = staticmethod(read_config)
-    build = staticmethod(add_wheel_actuators)
+    @classmethod
+    def configure(cls, block, robot):
+        """Return the DiffDriveConfig of a diff-drive block (see read_config)."""
+        return read_config(block, robot)
+
+    @classmethod
+    def build(cls, spec, config, timestep):
+        """Put the wheel servos on the robot's spec (see add_wheel_actuators)."""
+        add_wheel_actuators(spec, config, timestep)
 
     def bind(self, world, model):
         """Find the wheel actuators, wheel joints and base body in the compiled model."""
