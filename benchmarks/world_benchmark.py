@@ -10,7 +10,7 @@ as JSON (output/benchmark.json unless --json says otherwise). What runs where:
 - free-running speed, real-time factor, start-up and turning accuracy: the installed
   mujoco_world console script (and robot_turning_server) as separate processes, as users run
   them, observed from this process;
-- raw physics and core operations: service_tutorial.world.World in this process, no ROS.
+- raw physics and core operations: service_tutorial.sim.world.World in this process, no ROS.
 
 Run it with scripts/benchmark [--quick] [--json PATH].
 """
@@ -207,11 +207,11 @@ def fleet_parameters(count, real_time_factor):
 
 def core_fleet(count, *, driving):
     """Return a ROS-free World holding the same fleet, driving like the node's fleet."""
-    from service_tutorial.world import World
+    from service_tutorial.sim.world import World
     world = World(cmd_vel_timeout=0.0)
     path = model_path('tinybot')
     for index, name in enumerate(fleet_names(count)):
-        world.spawn_urdf_file(name, path, position=fleet_position(index), namespace=name)
+        world.spawn_urdf_file(name, path, position=fleet_position(index))
         if driving:
             world.command_velocity(name, DRIVE_LINEAR_X, DRIVE_ANGULAR_Z)
     return world

@@ -1,8 +1,8 @@
 """
 The MuJoCo world node: the Gazebo of this tutorial.
 
-It steps a service_tutorial.world.World and translates ROS to and from it: the model services
-under /mujoco/, /clock, and cmd_vel, odom and joint_states for every diff-drive robot.
+It steps a service_tutorial.sim.world.World and translates ROS to and from it: the model
+services under /mujoco/, /clock, and cmd_vel, odom and joint_states for every diff-drive robot.
 Stepping runs in a timer of the node's single callback group, so a service callback and a
 physics step never run at the same time and no locks are needed.
 """
@@ -21,7 +21,10 @@ from rclpy.node import Node
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState
 from service_tutorial.camera_stream import CameraStream
-from service_tutorial.world import MAX_WHEEL_RIM_SPEED, World, WorldError
+from service_tutorial.ros_names import normalise_namespace
+from service_tutorial.sim.plugins.diff_drive import MAX_WHEEL_RIM_SPEED
+from service_tutorial.sim.validation import WorldError
+from service_tutorial.sim.world import World
 from srv_interfaces.srv import DeleteModel, GetModelList, GetModelState, SetModelState
 from srv_interfaces.srv import SpawnModel
 from std_srvs.srv import Empty
@@ -127,7 +130,8 @@ class MujocoWorld(Node):
 
         self.real_time_factor = max(0.0, param('real_time_factor').value)
         self.world = World(timestep=param('timestep').value,
-                           cmd_vel_timeout=param('cmd_vel_timeout').value)
+                           cmd_vel_timeout=param('cmd_vel_timeout').value,
+                           package_resolver=get_package_share_directory)
         self._clock_period = 1.0 / param('clock_publish_rate').value
         self._odom_period = 1.0 / param('odom_publish_rate').value
         self._joint_state_period = 1.0 / param('joint_state_publish_rate').value
@@ -361,12 +365,12 @@ class MujocoWorld(Node):
     def spawn_model(self, name, urdf, namespace, position, orientation, reference_frame,
                     base_dir=None):
         """Add a model to the world and give its diff drive, if any, its topics."""
+        namespace = normalise_namespace(namespace)
         self.world.spawn_urdf(name, urdf, position=position, orientation=orientation,
-                              reference_frame=reference_frame, namespace=namespace,
-                              base_dir=base_dir)
+                              reference_frame=reference_frame, base_dir=base_dir)
         if name in self.world.diff_drive_models():
             try:
-                self.robots[name] = RobotTopics(self, name, self.world.namespace(name))
+                self.robots[name] = RobotTopics(self, name, namespace)
             except Exception:
                 self.world.delete_model(name)
                 raise

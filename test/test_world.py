@@ -8,9 +8,9 @@ import time
 import mujoco
 import numpy as np
 import pytest
-from service_tutorial.world import MAX_WHEEL_RIM_SPEED
-from service_tutorial.world import World
-from service_tutorial.world import WorldError
+from service_tutorial.sim.plugins.diff_drive import MAX_WHEEL_RIM_SPEED
+from service_tutorial.sim.validation import WorldError
+from service_tutorial.sim.world import World
 
 MODELS = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), 'models')
 TINYBOT = os.path.join(MODELS, 'tinybot.urdf')
@@ -105,19 +105,17 @@ def test_bad_poses_are_refused(world):
             ({'position': (0.0, math.inf, 0.0)}, 'position contains NaN or infinity'),
             ({'orientation': (0.0, 0.0, 0.0, 0.0)}, 'orientation quaternion is zero'),
             ({'orientation': (math.nan, 0.0, 0.0, 1.0)}, 'orientation contains NaN'),
-            ({'reference_frame': 'foo'}, "unknown reference frame 'foo'"),
-            ({'namespace': 'bad name'}, 'not a valid ROS namespace')]:
+            ({'reference_frame': 'foo'}, "unknown reference frame 'foo'")]:
         with pytest.raises(WorldError, match=message):
             world.spawn_urdf_file('r2d2', R2D2, **kwargs)
     assert world.model_names() == []
 
 
-def test_model_listing_namespace_and_delete(world):
-    world.spawn_urdf_file('tinybot', TINYBOT, namespace='robots/tiny/')
+def test_model_listing_and_delete(world):
+    world.spawn_urdf_file('tinybot', TINYBOT)
     world.spawn_urdf_file('r2d2', R2D2, position=(2.0, 0.0, 0.0))
     assert world.model_names() == ['tinybot', 'r2d2']
     assert world.has_model('r2d2') and not world.has_model('c3po')
-    assert world.namespace('tinybot') == '/robots/tiny' and world.namespace('r2d2') == ''
     assert world.diff_drive_models() == ['tinybot']
     world.delete_model('r2d2')
     assert world.model_names() == ['tinybot']
@@ -554,16 +552,6 @@ def test_pose_limits_and_extreme_quaternions(world):
     world.set_model_state('r2d2', position=(0.0, 0.0, 0.0), orientation=(0.0, 0.0, 0.0, 1e-300))
     np.testing.assert_allclose(world.get_model_state('r2d2').orientation, [0, 0, 0, 1],
                                atol=1e-12)
-
-
-def test_namespaces_ros_would_refuse_are_refused(world):
-    for namespace, message in [('robôt', "its part 'robôt' must start with a letter"),
-                               ('a/2b', "its part '2b' must start with a letter"),
-                               ('n' * 201, 'longer than 200 characters')]:
-        with pytest.raises(WorldError, match=message):
-            world.spawn_urdf_file('tinybot', TINYBOT, namespace=namespace)
-    world.spawn_urdf_file('tinybot', TINYBOT, namespace='/_robots/tiny_1/')
-    assert world.namespace('tinybot') == '/_robots/tiny_1'
 
 
 def pile(count):

@@ -12,7 +12,7 @@ from rclpy.parameter import Parameter
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState
 from service_tutorial.mujoco_world import MujocoWorld
-from service_tutorial.world import World
+from service_tutorial.sim.world import World
 from srv_interfaces.srv import DeleteModel, GetModelList, GetModelState, SetModelState
 from srv_interfaces.srv import SpawnModel
 from std_srvs.srv import Empty
