@@ -16,7 +16,7 @@ import time
 from rclpy.time import Time
 from sensor_msgs.msg import CameraInfo, Image
 from service_tutorial.image_files import write_png
-from service_tutorial.rendering import SceneCamera
+from service_tutorial.sim.rendering import SceneCamera
 from std_srvs.srv import Trigger
 
 CAMERA_FRAME = 'camera_optical_frame'  # z forward, x right, y down (REP 103, optical frames)

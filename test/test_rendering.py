@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 from service_tutorial.image_files import lzw_encode, median_cut_palette
 from service_tutorial.image_files import write_animation, write_png
-from service_tutorial.rendering import SceneCamera
+from service_tutorial.sim.rendering import SceneCamera
 from service_tutorial.trajectory_plot import write_trajectory_plot
 from service_tutorial.world import World
 import yaml
