@@ -360,6 +360,7 @@ class NodeProcess:
 
 def sim_time_sample(observer, model_name):
     """Return (simulation time, wall time) from one get_model_state round trip."""
+    from service_tutorial.conversions import seconds_of
     from srv_interfaces.srv import GetModelState
     start = time.monotonic()
     response = observer.call(GetModelState, '/mujoco/get_model_state',
@@ -367,8 +368,7 @@ def sim_time_sample(observer, model_name):
     end = time.monotonic()
     if not response.success:
         raise BenchmarkError(f'get_model_state {model_name}: {response.status_message}')
-    stamp = response.header.stamp
-    return stamp.sec + stamp.nanosec * 1e-9, 0.5 * (start + end), response
+    return seconds_of(response.header.stamp), 0.5 * (start + end), response
 
 
 def wait_for_world(observer, process, model_name):
@@ -460,11 +460,9 @@ class TrivialService:
 def spawn_request(index):
     """Return a request that spawns R2-D2 where the lesson does."""
     from geometry_msgs.msg import Pose
+    from service_tutorial.conversions import fill_pose_msg
     from srv_interfaces.srv import SpawnModel
-    pose = Pose()
-    pose.position.x, pose.position.y, pose.position.z = LESSON_POSITION
-    q = pose.orientation
-    q.w, q.x, q.y, q.z = LESSON_ORIENTATION
+    pose = fill_pose_msg(Pose(), LESSON_POSITION, LESSON_ORIENTATION)
     return SpawnModel.Request(model_name='r2d2', model_xml=read_model('r2d2'),
                               initial_pose=pose, reference_frame='world')
 
@@ -824,12 +822,6 @@ def startup_table(observer, config):
 # ------------------------------------------------------------------------ turning
 
 
-def yaw_of(orientation):
-    """Return the yaw of a geometry_msgs/Quaternion."""
-    q = orientation
-    return math.atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z))
-
-
 class YawTracker:
     """Unwraps yaw samples into the total angle turned; samples must be under pi apart."""
 
@@ -847,6 +839,7 @@ class YawTracker:
 
 def measure_turn(observer, duration, angular_vel):
     """Turn tinybot through /control_robot_angle; return the angle it really turned."""
+    from service_tutorial.conversions import yaw_of
     from srv_interfaces.srv import ControlTurningMessage
     _, _, state = sim_time_sample(observer, 'tinybot')
     tracker = YawTracker(yaw_of(state.pose.orientation))

@@ -13,19 +13,14 @@ import math
 import os
 import time
 
-from rclpy.time import Time
 from sensor_msgs.msg import CameraInfo, Image
+from service_tutorial.conversions import time_msg
 from service_tutorial.image_files import write_png
 from service_tutorial.sim.rendering import SceneCamera
 from std_srvs.srv import Trigger
 
 CAMERA_FRAME = 'camera_optical_frame'  # z forward, x right, y down (REP 103, optical frames)
 SUBSCRIBER_CHECK_PERIOD = 0.2  # s of wall time between two looks for a first subscriber
-
-
-def stamp_msg(seconds):
-    """Convert simulation seconds to a builtin_interfaces/Time."""
-    return Time(nanoseconds=int(round(seconds * 1e9))).to_msg()
 
 
 class CameraStream:
@@ -90,7 +85,7 @@ class CameraStream:
         """Render the world as a sensor_msgs/Image (rgb8) stamped with simulation time."""
         pixels = self.camera.render(self.world.model, self.world.data)
         msg = Image()
-        msg.header.stamp = stamp_msg(now)
+        msg.header.stamp = time_msg(now)
         msg.header.frame_id = CAMERA_FRAME
         msg.height, msg.width = pixels.shape[:2]
         msg.encoding = 'rgb8'
@@ -102,7 +97,7 @@ class CameraStream:
     def camera_info(self, now):
         """Describe the pinhole camera: no distortion, square pixels, K from fovy and size."""
         msg = CameraInfo()
-        msg.header.stamp = stamp_msg(now)
+        msg.header.stamp = time_msg(now)
         msg.header.frame_id = CAMERA_FRAME
         msg.height, msg.width = self.camera.height, self.camera.width
         msg.distortion_model = 'plumb_bob'

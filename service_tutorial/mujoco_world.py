@@ -21,6 +21,9 @@ from rclpy.node import Node
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState
 from service_tutorial.camera_stream import CameraStream
+from service_tutorial.conversions import fill_pose_msg, fill_time_msg, fill_twist_msg
+from service_tutorial.conversions import pose_from_msg, time_msg, twist_from_msg
+from service_tutorial.conversions import yaw_quaternion
 from service_tutorial.world import MAX_WHEEL_RIM_SPEED, World, WorldError
 from srv_interfaces.srv import DeleteModel, GetModelList, GetModelState, SetModelState
 from srv_interfaces.srv import SpawnModel
@@ -55,41 +58,6 @@ def resolve_model_path(model):
     if os.path.isabs(model):
         return model
     return os.path.join(get_package_share_directory(PACKAGE), 'models', model)
-
-
-def time_msg(seconds):
-    """Convert simulation seconds to a builtin_interfaces/Time."""
-    return fill_time_msg(Clock().clock, seconds)
-
-
-def fill_time_msg(msg, seconds):
-    """Write simulation seconds into a builtin_interfaces/Time and return it."""
-    sec = int(seconds)
-    nanosec = int(round((seconds - sec) * 1e9))
-    if nanosec >= 1_000_000_000:
-        sec += 1
-        nanosec -= 1_000_000_000
-    msg.sec, msg.nanosec = sec, nanosec
-    return msg
-
-
-def pose_from_msg(pose):
-    """Split a geometry_msgs/Pose into position and a MuJoCo (w, x, y, z) quaternion."""
-    q = pose.orientation
-    return ((pose.position.x, pose.position.y, pose.position.z), (q.w, q.x, q.y, q.z))
-
-
-def fill_pose_msg(pose, position, orientation):
-    """Write a position and a MuJoCo (w, x, y, z) quaternion into a geometry_msgs/Pose."""
-    pose.position.x, pose.position.y, pose.position.z = (float(v) for v in position)
-    q = pose.orientation
-    q.w, q.x, q.y, q.z = (float(v) for v in orientation)
-
-
-def fill_twist_msg(twist, linear, angular):
-    """Write linear and angular velocity vectors into a geometry_msgs/Twist."""
-    twist.linear.x, twist.linear.y, twist.linear.z = (float(v) for v in linear)
-    twist.angular.x, twist.angular.y, twist.angular.z = (float(v) for v in angular)
 
 
 class RobotTopics:
@@ -352,7 +320,7 @@ class MujocoWorld(Node):
                              '(4 numbers each) must describe the same number of models')
         for index, (model, name, namespace) in enumerate(zip(files, names, namespaces)):
             x, y, z, yaw = poses[4 * index:4 * index + 4]
-            orientation = (math.cos(yaw / 2), 0.0, 0.0, math.sin(yaw / 2))
+            orientation = yaw_quaternion(yaw)
             with open(resolve_model_path(model)) as model_file:
                 urdf = model_file.read()
             self.spawn_model(name, urdf, namespace, (x, y, z), orientation, '',
@@ -416,11 +384,10 @@ class MujocoWorld(Node):
         """Move a model to a pose and give it a twist."""
         def set_state():
             position, orientation = pose_from_msg(request.pose)
-            twist = request.twist
+            linear, angular = twist_from_msg(request.twist)
             self.world.set_model_state(
                 request.model_name, position=position, orientation=orientation,
-                linear_velocity=(twist.linear.x, twist.linear.y, twist.linear.z),
-                angular_velocity=(twist.angular.x, twist.angular.y, twist.angular.z),
+                linear_velocity=linear, angular_velocity=angular,
                 reference_frame=request.reference_frame)
             return f'SetModelState: set state of {request.model_name!r}'
         return self._answer('SetModelState', set_state, response)

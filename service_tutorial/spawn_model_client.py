@@ -15,8 +15,9 @@ from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
 from rclpy.utilities import remove_ros_args
 
-from service_tutorial.model_services import DEFAULT_TIMEOUT, make_pose, model_path
-from service_tutorial.model_services import response_text, spawn_model
+from service_tutorial.conversions import make_pose
+from service_tutorial.model_services import DEFAULT_TIMEOUT, model_path, response_text
+from service_tutorial.model_services import spawn_model
 
 # The lesson's pose: z rotation of -pi/2 as a quaternion (x, y, z, w).
 LESSON_POSITION = (-2.0, 1.0, 1.0)

@@ -10,6 +10,7 @@ import pytest
 from rclpy.parameter import Parameter
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import CameraInfo, Image
+from service_tutorial.conversions import seconds_of as seconds
 from service_tutorial.mujoco_world import MujocoWorld
 from std_srvs.srv import Trigger
 
@@ -27,11 +28,6 @@ def start_world(ros, **parameters):
     clock = ros.subscribe(Clock, '/clock')
     assert ros.wait_for(lambda: clock, timeout=10.0), 'no /clock from the world'
     return node
-
-
-def seconds(stamp):
-    """Convert a builtin_interfaces/Time to seconds."""
-    return stamp.sec + stamp.nanosec * 1e-9
 
 
 def png_size(path):

@@ -23,6 +23,7 @@ from nav_msgs.msg import Odometry
 import pytest
 from rclpy.parameter import Parameter
 from rosgraph_msgs.msg import Clock
+from service_tutorial.conversions import seconds_of, yaw_of
 from service_tutorial.mujoco_world import MujocoWorld
 from service_tutorial.robot_turning_server import RobotTurningServer
 from service_tutorial.world import MAX_WHEEL_RIM_SPEED
@@ -246,8 +247,7 @@ class WorldCalls:
         assert ros.wait_for(lambda: self.clock, timeout=10.0), 'no /clock from the world'
 
     def now(self):
-        stamp = self.clock[-1].clock
-        return stamp.sec + stamp.nanosec * 1e-9
+        return seconds_of(self.clock[-1].clock)
 
     def wait_sim(self, duration):
         end = self.now() + duration
@@ -642,8 +642,7 @@ class TestTurningService:
         assert succeeded
         world.wait_sim(0.5)
         end = world.state('tinybot').pose.orientation
-        yaw = [math.atan2(2 * (q.w * q.z + q.x * q.y), 1 - 2 * (q.y * q.y + q.z * q.z))
-               for q in (start, end)]
+        yaw = [yaw_of(q) for q in (start, end)]
         assert yaw[1] - yaw[0] == pytest.approx(-0.5, abs=0.05)
 
 

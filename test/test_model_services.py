@@ -10,9 +10,10 @@ from geometry_msgs.msg import Pose
 import pytest
 from rclpy.node import Node
 from rosgraph_msgs.msg import Clock
-from service_tutorial.model_services import delete_model, get_model_state, make_pose
-from service_tutorial.model_services import model_path, reset_simulation, response_text
-from service_tutorial.model_services import ServiceUnavailableError, spawn_model, yaw_of
+from service_tutorial.conversions import make_pose, yaw_of
+from service_tutorial.model_services import delete_model, get_model_state, model_path
+from service_tutorial.model_services import reset_simulation, response_text
+from service_tutorial.model_services import ServiceUnavailableError, spawn_model
 from service_tutorial.mujoco_world import MujocoWorld
 from srv_interfaces.srv import GetModelList, SpawnModel
 from std_srvs.srv import Empty
@@ -35,13 +36,13 @@ def test_make_pose_and_yaw_of_agree(yaw):
     pose = make_pose(1.0, 2.0, 3.0, yaw=yaw)
 
     assert (pose.position.x, pose.position.y, pose.position.z) == (1.0, 2.0, 3.0)
-    assert yaw_of(pose) == pytest.approx(yaw)
+    assert yaw_of(pose.orientation) == pytest.approx(yaw)
 
 
 def test_lesson_quaternion_is_a_quarter_turn_to_the_right():
     pose = make_pose(quaternion=(0.0, 0.0, -0.707, 0.707))
 
-    assert yaw_of(pose) == pytest.approx(-math.pi / 2)
+    assert yaw_of(pose.orientation) == pytest.approx(-math.pi / 2)
     with pytest.raises(ValueError):
         make_pose(yaw=0.0, quaternion=(0.0, 0.0, 0.0, 1.0))
 
@@ -72,7 +73,7 @@ def test_lesson_programs_spawn_delete_and_reset(ros):
     assert state.success, state.status_message
     assert state.pose.position.x == pytest.approx(-2.0, abs=0.02)
     assert state.pose.position.y == pytest.approx(1.0, abs=0.02)
-    assert math.degrees(yaw_of(state.pose)) == pytest.approx(-90.0, abs=1.0)
+    assert math.degrees(yaw_of(state.pose.orientation)) == pytest.approx(-90.0, abs=1.0)
 
     deleted = run('delete_model_client', 'r2d2')
 
@@ -99,7 +100,7 @@ def test_functions_call_the_world_from_a_spinning_node(ros):
     assert spawned.success, spawned.status_message
     state = get_model_state(node, 'r2d2')
     assert (state.pose.position.x, state.pose.position.y) == pytest.approx((1.0, 2.0), abs=0.02)
-    assert yaw_of(state.pose) == pytest.approx(0.3, abs=0.02)
+    assert yaw_of(state.pose.orientation) == pytest.approx(0.3, abs=0.02)
 
     assert delete_model(node, 'r2d2').success
     assert model_names(ros) == ['tinybot']

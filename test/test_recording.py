@@ -4,22 +4,17 @@ import math
 import os
 from xml.etree import ElementTree
 
-from builtin_interfaces.msg import Time
 from nav_msgs.msg import Odometry
 import numpy as np
 import pytest
 from rclpy.node import Node
 from sensor_msgs.msg import Image
+from service_tutorial.conversions import time_msg as stamp
 from service_tutorial.recording import image_pixels, TurnRecorder
 
 pytestmark = pytest.mark.ros
 
 WIDTH, HEIGHT = 40, 30
-
-
-def stamp(seconds):
-    """Make a builtin_interfaces/Time."""
-    return Time(sec=int(seconds), nanosec=int(round((seconds - int(seconds)) * 1e9)))
 
 
 def camera_image(seconds, encoding='rgb8', padding=0):

@@ -11,6 +11,7 @@ import pytest
 from rclpy.parameter import Parameter
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState
+from service_tutorial.conversions import seconds_of as seconds, yaw_of
 from service_tutorial.mujoco_world import MujocoWorld
 from service_tutorial.world import World
 from srv_interfaces.srv import DeleteModel, GetModelList, GetModelState, SetModelState
@@ -33,15 +34,6 @@ def lesson_pose():
     pose.position.x, pose.position.y, pose.position.z = -2.0, 1.0, 1.0
     pose.orientation.z, pose.orientation.w = -0.707, 0.707
     return pose
-
-
-def yaw_of(orientation):
-    q = orientation
-    return math.atan2(2 * (q.w * q.z + q.x * q.y), 1 - 2 * (q.y * q.y + q.z * q.z))
-
-
-def seconds(stamp):
-    return stamp.sec + stamp.nanosec * 1e-9
 
 
 class WorldClient:
