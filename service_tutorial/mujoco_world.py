@@ -14,13 +14,12 @@ import time
 from ament_index_python.packages import get_package_share_directory
 from geometry_msgs.msg import Twist
 from nav_msgs.msg import Odometry
-import rclpy
 from rclpy.clock import Clock as WallClock, ClockType
-from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState
 from service_tutorial.camera_stream import CameraStream
+from service_tutorial.client_main import spin_node
 from service_tutorial.conversions import fill_pose_msg, fill_time_msg, fill_twist_msg
 from service_tutorial.conversions import pose_from_msg, time_msg, twist_from_msg
 from service_tutorial.conversions import yaw_quaternion
@@ -467,21 +466,7 @@ class MujocoWorld(Node):
 
 def main(args=None):
     """Run the MuJoCo world until Ctrl-C."""
-    rclpy.init(args=args)
-    node = None
-    try:
-        node = MujocoWorld()
-        rclpy.spin(node)
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    except Exception:
-        # Ctrl-C shuts the context down under the running step: publishing then fails.
-        if rclpy.ok():
-            raise
-    finally:
-        if node is not None:
-            node.destroy_node()
-        rclpy.try_shutdown()
+    return spin_node(MujocoWorld, args=args)
 
 
 if __name__ == '__main__':

@@ -24,8 +24,8 @@ import rclpy
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.signals import SignalHandlerOptions
-from rclpy.utilities import remove_ros_args
 from service_tutorial import model_services
+from service_tutorial.client_main import program_arguments
 from service_tutorial.conversions import make_pose, seconds_of, yaw_of
 from service_tutorial.model_services import response_text
 from service_tutorial.recording import TurnRecorder
@@ -279,7 +279,7 @@ def parse_arguments(argv):
 
 def main(args=None):
     """Run the demo; exit status 0 if every step succeeded."""
-    options = parse_arguments(remove_ros_args(sys.argv if args is None else args)[1:])
+    options = parse_arguments(program_arguments(args))
     log_dir = options.log_dir or tempfile.mkdtemp(prefix='turning_demo-')
     os.makedirs(log_dir, exist_ok=True)
     # Ctrl-C and SIGTERM raise KeyboardInterrupt here, so the children are always stopped.
