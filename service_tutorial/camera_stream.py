@@ -26,20 +26,20 @@ SUBSCRIBER_CHECK_PERIOD = 0.2  # s of wall time between two looks for a first su
 class CameraStream:
     """Renders the world for ~/camera/image_raw and ~/camera/camera_info, and snapshots."""
 
-    def __init__(self, node, world):
-        param = node.get_parameter
+    def __init__(self, node, world, parameters):
+        """Make the camera from the node's camera_* parameters (a dict of values)."""
         self.node = node
         self.world = world
-        self.enabled = bool(param('camera_enabled').value)
-        rate = float(param('camera_rate').value)
+        self.enabled = bool(parameters['camera_enabled'])
+        rate = float(parameters['camera_rate'])
         if self.enabled and not rate > 0.0:
             raise ValueError(f'camera_rate must be above 0 Hz, got {rate}')
         self.period = 1.0 / rate if self.enabled else math.inf
         self.camera = SceneCamera(
-            param('camera_width').value, param('camera_height').value,
-            list(param('camera_position').value), list(param('camera_look_at').value),
-            param('camera_fovy').value)
-        self.snapshot_directory = param('snapshot_directory').value or os.getcwd()
+            parameters['camera_width'], parameters['camera_height'],
+            list(parameters['camera_position']), list(parameters['camera_look_at']),
+            parameters['camera_fovy'])
+        self.snapshot_directory = parameters['snapshot_directory'] or os.getcwd()
         self.next_due = math.inf  # simulation time of the next frame; inf: nobody listens
         self._next_subscriber_check = 0.0
         self.image_pub = self.info_pub = None

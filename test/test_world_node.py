@@ -253,6 +253,28 @@ def test_state_in_a_model_frame_and_in_a_link_frame(fast_world):
     assert fast_world.state('r2d2', frame='tinybot::base_link').success
 
 
+def test_every_model_gets_a_ros_interface_under_its_namespace(fast_world):
+    node = fast_world.node
+    beside = Pose()
+    beside.position.x = 2.0
+    spawned = fast_world.spawn('tiny', read_model('tinybot'), beside, namespace='robots/tiny/')
+    assert spawned.success, spawned.status_message
+    assert fast_world.spawn('r2d2', read_model('r2d2'), lesson_pose()).success
+    assert list(node.models) == ['tinybot', 'tiny', 'r2d2']
+    assert node.models['tiny'].namespace == '/robots/tiny'
+    assert node.models['tinybot'].namespace == node.models['r2d2'].namespace == ''
+
+    def topics():
+        return ({publisher.topic_name for publisher in node.publishers}
+                | {subscription.topic_name for subscription in node.subscriptions})
+    tiny_topics = {'/robots/tiny/cmd_vel', '/robots/tiny/odom', '/robots/tiny/joint_states'}
+    assert tiny_topics | {'/cmd_vel', '/odom', '/joint_states'} <= topics()
+    assert not node.models['r2d2'].plugins, 'R2-D2 has no plugin with a ROS face'
+    assert fast_world.delete('tiny').success
+    assert list(node.models) == ['tinybot', 'r2d2']
+    assert not tiny_topics & topics()
+
+
 BAD_SPAWNS = [
     ('', read_model('tinybot'), Pose(), 'world', 'empty'),
     ('tinybot', read_model('tinybot'), Pose(), 'world', 'exists'),
