@@ -3,7 +3,6 @@
 import math
 import os
 import subprocess
-import time
 
 from ament_index_python.packages import get_package_prefix
 from geometry_msgs.msg import Pose
@@ -127,14 +126,13 @@ def test_functions_spin_a_node_no_executor_owns(ros):
 
 
 @pytest.mark.ros
-def test_a_missing_service_raises_an_error_naming_it_in_time(rclpy_session):
-    # No world in this namespace: the relative names resolve under /nowhere.
+def test_a_missing_service_raises_an_error_naming_it(rclpy_session):
+    # No world in this namespace: the relative names resolve under /nowhere. How soon the
+    # error comes is the benchmark's business (its answers table).
     node = Node('lesson_script', namespace='/nowhere')
     try:
-        started = time.monotonic()
         with pytest.raises(ServiceUnavailableError, match='/nowhere/mujoco/delete_model'):
             delete_model(node, 'r2d2', timeout=0.5)
-        assert time.monotonic() - started < 1.5
     finally:
         node.destroy_node()
 
