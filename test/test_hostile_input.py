@@ -22,7 +22,7 @@ from nav_msgs.msg import Odometry
 import pytest
 from rclpy.parameter import Parameter
 from rosgraph_msgs.msg import Clock
-from service_tutorial.conversions import seconds_of, yaw_of
+from service_tutorial.conversions import fill_pose_msg, fill_twist_msg, seconds_of, yaw_of
 from service_tutorial.mujoco_world import MujocoWorld
 from service_tutorial.robot_turning_server import RobotTurningServer
 from service_tutorial.world import MAX_WHEEL_RIM_SPEED
@@ -65,18 +65,11 @@ def mesh_robot(filename):
 
 
 def pose(x=0.0, y=0.0, z=0.5, w=1.0, qx=0.0, qy=0.0, qz=0.0):
-    msg = Pose()
-    msg.position.x, msg.position.y, msg.position.z = float(x), float(y), float(z)
-    q = msg.orientation
-    q.w, q.x, q.y, q.z = float(w), float(qx), float(qy), float(qz)
-    return msg
+    return fill_pose_msg(Pose(), (x, y, z), (w, qx, qy, qz))
 
 
 def twist(linear=(0.0, 0.0, 0.0), angular=(0.0, 0.0, 0.0)):
-    msg = Twist()
-    msg.linear.x, msg.linear.y, msg.linear.z = (float(v) for v in linear)
-    msg.angular.x, msg.angular.y, msg.angular.z = (float(v) for v in angular)
-    return msg
+    return fill_twist_msg(Twist(), linear, angular)
 
 
 def finite(*values):
