@@ -24,3 +24,8 @@ def normalise_namespace(namespace):
         raise WorldError(f'robot namespace {quoted(namespace)} is longer than '
                          f'{MAX_NAMESPACE_LENGTH} characters')
     return normalised
+
+
+def topic_prefix(namespace):
+    """Return what goes before a topic's relative name in a normalised namespace."""
+    return namespace + '/' if namespace else ''

@@ -3,7 +3,6 @@
 import logging
 import math
 import os
-import time
 
 import mujoco
 import numpy as np
@@ -432,29 +431,26 @@ def test_step_count_and_world_settings():
         World(timestep=0.0)
 
 
-def test_spawning_takes_milliseconds_and_stepping_costs_what_mujoco_costs(tinybot_world):
+def test_spawned_models_step_exactly_as_bare_mujoco_steps(tinybot_world):
+    # How long spawning and stepping take is the benchmark's business (its core table).
     world = tinybot_world
-    durations = []
     for index in range(5):
-        start = time.perf_counter()
         world.spawn_urdf_file(f'r2d2_{index}', R2D2, position=(2.0 + index, 0.0, 0.0))
-        durations.append(time.perf_counter() - start)
-    assert sorted(durations)[2] < 0.05
+    assert world.model_names() == ['tinybot'] + [f'r2d2_{index}' for index in range(5)]
 
     model, data = world.model, world.data
+    kind = mujoco.mjtState.mjSTATE_INTEGRATION
     raw = mujoco.MjData(model)
-    state = np.empty(mujoco.mj_stateSize(model, mujoco.mjtState.mjSTATE_INTEGRATION))
-    mujoco.mj_getState(model, data, state, mujoco.mjtState.mjSTATE_INTEGRATION)
-    mujoco.mj_setState(model, raw, state, mujoco.mjtState.mjSTATE_INTEGRATION)
-    world_best = raw_best = math.inf
-    for _ in range(5):
-        start = time.perf_counter()
-        world.step(1000)
-        world_best = min(world_best, time.perf_counter() - start)
-        start = time.perf_counter()
+    state = np.empty(mujoco.mj_stateSize(model, kind))
+    mujoco.mj_getState(model, data, state, kind)
+    mujoco.mj_setState(model, raw, state, kind)
+    raw_state = np.empty_like(state)
+    for _ in range(3):
+        assert world.step(1000) == 1000
         mujoco.mj_step(model, raw, 1000)
-        raw_best = min(raw_best, time.perf_counter() - start)
-    assert world_best < 1.5 * raw_best
+        mujoco.mj_getState(model, data, state, kind)
+        mujoco.mj_getState(model, raw, raw_state, kind)
+        np.testing.assert_array_equal(state, raw_state)
 
 
 def block_robot(mass, size):
