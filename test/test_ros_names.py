@@ -1,7 +1,10 @@
 """The ROS namespace rules the world node applies to a spawn request, without ROS running."""
 
+import types
+
 import pytest
-from service_tutorial.ros_names import normalise_namespace, topic_prefix
+from service_tutorial.ros_names import normalise_namespace, plugin_topic, topic_prefix
+from service_tutorial.sim.urdf.gazebo import PluginBlock
 from service_tutorial.sim.validation import WorldError
 
 
@@ -37,3 +40,60 @@ def test_a_refusal_names_the_namespace_and_why(namespace, message):
     with pytest.raises(WorldError) as refusal:
         normalise_namespace(namespace)
     assert str(refusal.value) == message
+
+
+def block(name='diff_drive', namespace='', remappings=(), arguments=(), **parameters):
+    """Return a plugin block as the URDF loader keeps it."""
+    return PluginBlock(
+        filename='libgazebo_ros_plugin.so', name=name,
+        parameters=types.MappingProxyType({tag: (text,) for tag, text in parameters.items()}),
+        ros_namespace=namespace, ros_remappings=tuple(remappings), ros_arguments=tuple(arguments))
+
+
+@pytest.mark.parametrize('plugin, topic, robot_namespace, expected', [
+    (block(), 'cmd_vel', '', 'cmd_vel'),
+    (block(namespace='/bot'), 'cmd_vel', '', '/bot/cmd_vel'),
+    (block(namespace='bot'), 'cmd_vel', '', '/bot/cmd_vel'),
+    (block(name='laser'), '~/out', '', 'laser/out'),
+    (block(name='laser', remappings=['~/out:=scan']), '~/out', '', 'scan'),
+    (block(name='laser', namespace='/bot', remappings=['~/out:=scan']), '~/out', '',
+     '/bot/scan'),
+    (block(remappings=['cmd_vel:=cmd']), 'cmd_vel', '', 'cmd'),
+    (block(namespace='/bot', remappings=['cmd_vel:=cmd']), 'cmd_vel', '', '/bot/cmd'),
+    (block(), 'cmd_vel', '/tb2', '/tb2/cmd_vel'),
+    # gazebo_ros replaces the plugin's namespace with the spawn request's.
+    (block(namespace='/bot'), 'cmd_vel', '/tb2', '/tb2/cmd_vel'),
+    (block(name='laser', namespace='/bot', remappings=['~/out:=/scan']), '~/out', '/tb2',
+     '/scan'),
+    (block(name='laser', arguments=['~/out:=scan']), '~/out', '/tb2', '/tb2/scan'),
+    (block(remappings=['odom:=odometry']), 'cmd_vel', '', 'cmd_vel'),
+])
+def test_plugin_topics_land_where_gazebo_ros_puts_them(plugin, topic, robot_namespace,
+                                                       expected):
+    assert plugin_topic(plugin, topic, robot_namespace=robot_namespace) == expected
+
+
+@pytest.mark.parametrize('plugin, tag, robot_namespace, expected', [
+    (block(topicName='/scan'), 'topicName', '/tb2', '/scan'),
+    (block(topicName='imu/data'), 'topicName', '/tb2', '/tb2/imu/data'),
+    (block(commandTopic='cmd_vel'), 'commandTopic', '', 'cmd_vel'),
+    (block(commandTopic='base/cmd_vel', robotNamespace='robot1'), 'commandTopic', '',
+     '/robot1/base/cmd_vel'),
+    (block(robotNamespace='robot1'), 'commandTopic', '/tb2', '/tb2/cmd_vel'),
+])
+def test_ros1_topic_tags_and_robot_namespace(plugin, tag, robot_namespace, expected):
+    assert plugin_topic(plugin, 'cmd_vel', robot_namespace=robot_namespace,
+                        ros1_tag=tag) == expected
+
+
+@pytest.mark.parametrize('plugin, message', [
+    (block(commandTopic='cmd vel'), "plugin 'diff_drive' names topic 'cmd vel', which is not a "
+                                    'valid ROS topic name'),
+    (block(remappings=['cmd_vel:=2fast']), "plugin 'diff_drive' names topic '2fast'"),
+    (block(namespace='1bot'), "plugin 'diff_drive' has namespace '1bot', which is not a valid "
+                              'ROS namespace'),
+])
+def test_bad_plugin_topics_are_refused_by_name(plugin, message):
+    with pytest.raises(WorldError) as error:
+        plugin_topic(plugin, 'cmd_vel', ros1_tag='commandTopic')
+    assert str(error.value).startswith(message)
