@@ -3,7 +3,8 @@ Spawn R2-D2 next to tinybot through /mujoco/spawn_urdf_model, as the lesson does
 
 The ROS 2 counterpart of the lesson's spawn_model_client.py: it reads models/r2d2.urdf from
 the package share and asks the world to put it at (-2, 1, 1), turned -90 degrees about z, in the
-world frame. Options choose another model, name, pose, namespace or reference frame.
+world frame. Options choose another model, name, pose, namespace or reference frame. A xacro
+file is expanded here, with --xacro-arg name:=value, before it is sent: the service takes URDF.
 """
 
 import os
@@ -14,6 +15,7 @@ from rclpy.node import Node
 from service_tutorial.client_main import parse_client_arguments, program_arguments, run_node
 from service_tutorial.conversions import make_pose
 from service_tutorial.model_services import model_path, response_text, spawn_model
+from service_tutorial.robot_files import parse_xacro_arguments, RobotFileError
 
 # The lesson's pose: z rotation of -pi/2 as a quaternion (x, y, z, w).
 LESSON_POSITION = (-2.0, 1.0, 1.0)
@@ -23,8 +25,10 @@ LESSON_QUATERNION = (0.0, 0.0, -0.707, 0.707)
 def add_spawn_arguments(parser):
     """Add the model, pose, namespace and frame options to the command-line parser."""
     parser.add_argument('--file', default='r2d2.urdf',
-                        help="URDF file: a path, or a file name in this package's models/ "
-                             'folder (default: %(default)s)')
+                        help="URDF or xacro file: a path, or a file name in this package's "
+                             'models/ folder (default: %(default)s)')
+    parser.add_argument('--xacro-arg', action='append', default=[], metavar='NAME:=VALUE',
+                        help='argument for a xacro file (repeat for more)')
     parser.add_argument('--name', default='r2d2', help='model name (default: %(default)s)')
     parser.add_argument('-x', type=float, default=LESSON_POSITION[0], help='x in m (default: -2)')
     parser.add_argument('-y', type=float, default=LESSON_POSITION[1], help='y in m (default: 1)')
@@ -51,9 +55,33 @@ def parse_arguments(argv):
     return options
 
 
+def split_xacro_arguments(argv):
+    """
+    Return argv without its '--xacro-arg name:=value' pairs, and those as '--xacro-arg=...'.
+
+    rcl would take a bare name:=value for a remapping (a deprecated form it still accepts)
+    and drop it, so the pairs are taken out before ROS sees the command line.
+    """
+    rest, xacro_arguments = [], []
+    tokens = iter(argv)
+    for token in tokens:
+        if token == '--ros-args':
+            rest += [token, *tokens]
+        elif token == '--xacro-arg':
+            value = next(tokens, None)
+            if value is None:
+                rest.append(token)  # argparse says that a value is missing
+            else:
+                xacro_arguments.append('--xacro-arg=' + value)
+        else:
+            rest.append(token)
+    return rest, xacro_arguments
+
+
 def main(args=None):
     """Spawn one model, print the response, exit with status 0 if the world spawned it."""
-    options = parse_arguments(program_arguments(args))
+    args, xacro_arguments = split_xacro_arguments(sys.argv if args is None else args)
+    options = parse_arguments(program_arguments(args) + xacro_arguments)
 
     def spawn(node):
         pose = make_pose(options.x, options.y, options.z,
@@ -61,11 +89,13 @@ def main(args=None):
         response = spawn_model(
             node, options.name, model_file=options.file, pose=pose,
             namespace=options.namespace, reference_frame=options.reference_frame,
+            xacro_arguments=parse_xacro_arguments(options.xacro_arg, path=options.file),
             timeout=options.timeout)
         print(response_text(response))
         return 0 if response.success else 1
     return run_node(lambda: Node('spawn_model_client'), spawn, args=args,
-                    program='spawn_model_client', errors=(OSError, TimeoutError))
+                    program='spawn_model_client',
+                    errors=(OSError, RobotFileError, TimeoutError))
 
 
 if __name__ == '__main__':
