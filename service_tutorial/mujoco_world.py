@@ -22,6 +22,7 @@ from service_tutorial.conversions import yaw_quaternion
 from service_tutorial.model_interface import JOINT_STATES_STREAM, ModelInterface
 from service_tutorial.model_interface import ODOMETRY_STREAM
 from service_tutorial.pacing import Pacer
+from service_tutorial.robot_files import read_robot_file
 from service_tutorial.ros_names import normalise_namespace
 from service_tutorial.sim.validation import WorldError
 from service_tutorial.sim.world import World
@@ -43,7 +44,7 @@ def declare_parameters(node):
 
 
 def resolve_model_path(model):
-    """Find a model file: an absolute path, or a file in the package's models/ folder."""
+    """Find a model file (URDF or xacro): an absolute path, or one in the package's models/."""
     if os.path.isabs(model):
         return model
     return os.path.join(get_package_share_directory(PACKAGE), 'models', model)
@@ -107,10 +108,9 @@ class MujocoWorld(Node):
         self.camera_stream = CameraStream(self, self.world, parameters)
 
         for path, name, namespace, position, orientation in start_up_models(parameters):
-            with open(path) as model_file:
-                urdf = model_file.read()
-            self.spawn_model(name, urdf, namespace, position, orientation, '',
-                             base_dir=os.path.dirname(path))
+            robot_file = read_robot_file(path)
+            self.spawn_model(name, robot_file.urdf, namespace, position, orientation, '',
+                             base_dir=robot_file.base_dir)
         if parameters['paused']:
             self.world.pause()
         if parameters['gui']:
