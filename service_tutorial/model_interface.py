@@ -3,18 +3,20 @@ The ROS face of one model in the world: the turtle of turtlesim.
 
 The world node makes a ModelInterface when it spawns a model and destroys it along with the
 model. The interface keeps the model's ROS namespace and gives each plugin of the model its
-topics under it; today that is the diff drive (cmd_vel in, odom and joint_states out, like
-gazebo_ros_diff_drive). A sensor is one more small class in PLUGIN_INTERFACES: a class method
-applies_to(world, model_name), publish(stream, now) for the node's publication streams, and
-destroy().
+topics, where ros_names.plugin_topic() says gazebo_ros would put them; today that is every
+drive (cmd_vel in, odom and joint_states out, like gazebo_ros_diff_drive and
+gazebo_ros_skid_steer_drive). A sensor is one more small class in PLUGIN_INTERFACES: a class
+method applies_to(plugin), a constructor (node, world, model, plugin, namespace),
+publish(stream, now) for the node's publication streams, and destroy().
 """
 
 from geometry_msgs.msg import Twist
 from nav_msgs.msg import Odometry
 from sensor_msgs.msg import JointState
 from service_tutorial.conversions import fill_pose_msg, fill_time_msg, fill_twist_msg
-from service_tutorial.ros_names import topic_prefix
+from service_tutorial.ros_names import plugin_topic
 from service_tutorial.sim.plugins.diff_drive import MAX_WHEEL_RIM_SPEED
+from service_tutorial.sim.validation import finite_number
 from service_tutorial.sim.validation import WorldError
 
 # The node's publication streams the plugins' topics go out on.
@@ -22,27 +24,44 @@ ODOMETRY_STREAM = 'odom'
 JOINT_STATES_STREAM = 'joint_states'
 
 
-class DiffDriveInterface:
-    """A diff drive's topics: cmd_vel in, odom and joint_states out."""
+class DriveInterface:
+    """A drive's topics (diff drive or skid steer): cmd_vel in, odom and joint_states out."""
 
     @classmethod
-    def applies_to(cls, world, model_name):
-        """Tell whether the model carries a diff drive."""
-        return model_name in world.diff_drive_models()
+    def applies_to(cls, plugin):
+        """Tell whether a plugin is a drive."""
+        return getattr(plugin, 'is_drive', False)
 
-    def __init__(self, node, world, model_name, prefix):
+    def __init__(self, node, world, model, plugin, namespace):
+        """Make the drive's topics; namespace is the model's, normalised ('' or '/a/b')."""
         self.node = node
         self.world = world
-        self.model_name = model_name
+        self.model = model
+        self.drive = plugin
+        config, block = plugin.config, plugin.block
+        # Every name is worked out before a topic is made: a bad one leaves nothing behind.
+        cmd_vel_topic, odom_topic, joint_states_topic = (
+            plugin_topic(block, topic, robot_namespace=namespace, ros1_tag=ros1_tag)
+            for topic, ros1_tag in (('cmd_vel', 'commandTopic'), ('odom', 'odometryTopic'),
+                                    ('joint_states', None)))
         self.cmd_vel_sub = node.create_subscription(
-            Twist, prefix + 'cmd_vel', self.cmd_vel_callback, 10)
-        self.odom_pub = node.create_publisher(Odometry, prefix + 'odom', 10)
-        self.joint_states_pub = node.create_publisher(JointState, prefix + 'joint_states', 10)
+            Twist, cmd_vel_topic, self.cmd_vel_callback, 10)
+        self.odom_pub = self.joint_states_pub = None
+        self._publishers = {}
+        if config.publish_odom:
+            self.odom_pub = node.create_publisher(Odometry, odom_topic, 10)
+            self._publishers[ODOMETRY_STREAM] = self.publish_odometry
+        if config.publish_wheel_joint_state:
+            self.joint_states_pub = node.create_publisher(JointState, joint_states_topic, 10)
+            self._publishers[JOINT_STATES_STREAM] = self.publish_joint_states
         # Filled in and published again every time: publish() copies the message.
         self.odom_msg = Odometry()
+        if config.covariance is not None:
+            # Six pose then six twist variances, on the diagonals of the 6 x 6 matrices.
+            for index, variance in enumerate(config.covariance):
+                matrix = self.odom_msg.pose if index < 6 else self.odom_msg.twist
+                matrix.covariance[7 * (index % 6)] = float(variance)
         self.joint_states_msg = JointState()
-        self._publishers = {ODOMETRY_STREAM: self.publish_odometry,
-                            JOINT_STATES_STREAM: self.publish_joint_states}
 
     def publish(self, stream, now):
         """Publish what belongs to a stream that fell due at simulation time now."""
@@ -52,7 +71,7 @@ class DiffDriveInterface:
 
     def publish_odometry(self, now):
         """Publish the robot's odometry in its odometry frame (REP 105)."""
-        odometry = self.world.odometry(self.model_name)  # integrates the encoders, always
+        odometry = self.drive.odometry()  # integrates the encoders, always
         if self.odom_pub.get_subscription_count() == 0:
             return  # nobody would receive it: skip the message, the costly part
         msg = self.odom_msg
@@ -67,7 +86,7 @@ class DiffDriveInterface:
         """Publish the positions and velocities of the robot's moving joints."""
         if self.joint_states_pub.get_subscription_count() == 0:
             return
-        names, positions, velocities = self.world.joint_state(self.model_name)
+        names, positions, velocities = self.world.joint_state(self.model.name)
         msg = self.joint_states_msg
         fill_time_msg(msg.header.stamp, now)
         msg.name = names
@@ -76,15 +95,17 @@ class DiffDriveInterface:
         self.joint_states_pub.publish(msg)
 
     def cmd_vel_callback(self, msg):
-        """Hand a velocity command to the world; the next steps apply it."""
-        name = self.model_name
+        """Hand a velocity command to the drive; the next steps apply it."""
+        name = self.model.name
         try:
-            applied = self.world.command_velocity(name, msg.linear.x, msg.angular.z)
+            commanded = (finite_number(msg.linear.x, 'linear.x'),
+                         finite_number(msg.angular.z, 'angular.z'))
+            applied = self.drive.command_velocity(*commanded)
         except WorldError as error:
             self.node.get_logger().warning(
                 f'ignored cmd_vel for {name}: {error}', throttle_duration_sec=1.0)
             return
-        if applied != (msg.linear.x, msg.angular.z):
+        if tuple(applied) != commanded:
             self.node.get_logger().warning(
                 f'cmd_vel for {name} (linear.x {msg.linear.x}, angular.z {msg.angular.z}) '
                 f'turns a wheel faster than {MAX_WHEEL_RIM_SPEED} m/s; scaled down to '
@@ -94,26 +115,28 @@ class DiffDriveInterface:
     def destroy(self):
         """Remove the drive's topics from the node."""
         self.node.destroy_subscription(self.cmd_vel_sub)
-        self.node.destroy_publisher(self.odom_pub)
-        self.node.destroy_publisher(self.joint_states_pub)
+        for publisher in (self.odom_pub, self.joint_states_pub):
+            if publisher is not None:
+                self.node.destroy_publisher(publisher)
 
 
 # Every kind of plugin that has a ROS face, in the order their topics are made.
-PLUGIN_INTERFACES = (DiffDriveInterface,)
+PLUGIN_INTERFACES = (DriveInterface,)
 
 
 class ModelInterface:
     """One model's namespace and the topics of each of its plugins."""
 
-    def __init__(self, node, world, model_name, namespace):
+    def __init__(self, node, world, model, namespace):
         """Give a model just spawned its topics; namespace is normalised ('' or '/a/b')."""
-        self.model_name = model_name
+        self.model_name = model.name
         self.namespace = namespace
         self.plugins = []
         try:
             for kind in PLUGIN_INTERFACES:
-                if kind.applies_to(world, model_name):
-                    self.plugins.append(kind(node, world, model_name, topic_prefix(namespace)))
+                for plugin in model.plugins:
+                    if kind.applies_to(plugin):
+                        self.plugins.append(kind(node, world, model, plugin, namespace))
         except Exception:
             self.destroy()
             raise

@@ -65,6 +65,18 @@ def start_up_models(parameters):
             for index, (model, name, namespace) in enumerate(zip(files, names, namespaces))]
 
 
+def left_out_of(description):
+    """Say which meshes and plugins of a spawned robot the world left out, or return ''."""
+    parts = []
+    meshes = description.missing_meshes
+    if meshes:
+        parts.append(f'{len(meshes)} {"mesh" if len(meshes) == 1 else "meshes"} not found, '
+                     f'left out: {", ".join(meshes)}')
+    if description.ignored_plugins:
+        parts.append(f'plugins not simulated: {", ".join(description.ignored_plugins)}')
+    return '; '.join(parts)
+
+
 class MujocoWorld(Node):
     """Serves a MuJoCo world the way gazebo_ros serves Gazebo's."""
 
@@ -176,18 +188,22 @@ class MujocoWorld(Node):
 
     def spawn_model(self, name, urdf, namespace, position, orientation, reference_frame,
                     base_dir=None):
-        """Add a model to the world and give it its ROS interface."""
+        """Add a model to the world and give it its ROS interface; return what was left out."""
         # Refused before the world is asked: a bad namespace leaves the world untouched.
         namespace = normalise_namespace(namespace)
-        self.world.spawn_urdf(name, urdf, position=position, orientation=orientation,
-                              reference_frame=reference_frame, base_dir=base_dir)
+        model = self.world.spawn_urdf(name, urdf, position=position, orientation=orientation,
+                                      reference_frame=reference_frame, base_dir=base_dir)
         try:
-            self.models[name] = ModelInterface(self, self.world, name, namespace)
+            self.models[name] = ModelInterface(self, self.world, model, namespace)
         except Exception:
             self.world.delete_model(name)
             raise
         if self.viewer is not None:
             self._open_viewer()
+        left_out = left_out_of(model.description)
+        if left_out:
+            self.get_logger().warning(f'spawned model {name!r}: {left_out}')
+        return left_out
 
     def _forget_model(self, name):
         """Destroy the ROS interface of a model that left the world."""
@@ -199,9 +215,11 @@ class MujocoWorld(Node):
         """Spawn a URDF model; failures are answered, never raised."""
         def spawn():
             position, orientation = pose_from_msg(request.initial_pose)
-            self.spawn_model(request.model_name, request.model_xml, request.robot_namespace,
-                             position, orientation, request.reference_frame)
-            return f'SpawnModel: Successfully spawned entity {request.model_name!r}'
+            left_out = self.spawn_model(request.model_name, request.model_xml,
+                                        request.robot_namespace, position, orientation,
+                                        request.reference_frame)
+            answer = f'SpawnModel: Successfully spawned entity {request.model_name!r}'
+            return f'{answer} ({left_out})' if left_out else answer
         return self._answer('SpawnModel', spawn, response)
 
     def delete_model_callback(self, request, response):
