@@ -38,10 +38,10 @@ def lesson_pose():
 class WorldClient:
     """The world node on an executor, and short ways to call its services."""
 
-    def __init__(self, ros, real_time_factor):
+    def __init__(self, ros, real_time_factor, parameters=()):
         self.ros = ros
         self.node = MujocoWorld(parameter_overrides=[
-            Parameter('real_time_factor', value=real_time_factor)])
+            Parameter('real_time_factor', value=real_time_factor), *parameters])
         # Count the ticks of the step timer: each one is a chance for the world to step.
         self.ticks = 0
         step = self.node.step_timer.callback
