@@ -305,6 +305,7 @@ class WorldParameters(Mapping):
         for spec in specs:
             self._declare(spec, values[spec.name])
         self._values = {name: _frozen(value) for name, value in values.items()}
+        # rclpy joins the lists that all pre-set callbacks return: keep this one the only one.
         node.add_pre_set_parameters_callback(self.coerce_callback)
         node.add_on_set_parameters_callback(self.validate_callback)
         node.add_post_set_parameters_callback(self.changed_callback)
