@@ -22,7 +22,7 @@ from service_tutorial.conversions import yaw_quaternion
 from service_tutorial.model_interface import JOINT_STATES_STREAM, ModelInterface
 from service_tutorial.model_interface import ODOMETRY_STREAM
 from service_tutorial.pacing import Pacer
-from service_tutorial.robot_files import read_robot_file
+from service_tutorial.robot_files import file_model_name, read_robot_file
 from service_tutorial.ros_names import normalise_namespace
 from service_tutorial.sim.validation import WorldError
 from service_tutorial.sim.world import World
@@ -53,8 +53,7 @@ def resolve_model_path(model):
 def start_up_models(parameters):
     """Return (file, name, namespace, position, orientation) of each model present at start."""
     files = list(parameters['models'])
-    names = list(parameters['model_names']) or [
-        os.path.splitext(os.path.basename(f))[0] for f in files]
+    names = list(parameters['model_names']) or [file_model_name(f) for f in files]
     namespaces = list(parameters['model_namespaces']) or [''] * len(files)
     poses = list(parameters['model_poses']) or [0.0] * 4 * len(files)
     if not len(files) == len(names) == len(namespaces) == len(poses) // 4:

@@ -33,6 +33,14 @@ def is_xacro(path, text):
     return path.endswith(XACRO_EXTENSION) or XACRO_NAMESPACE in text
 
 
+def file_model_name(path):
+    """Return the model name a robot file suggests: robot.urdf.xacro -> robot."""
+    name = os.path.basename(path)
+    for extension in (XACRO_EXTENSION, '.urdf'):
+        name = name[:-len(extension)] if name.endswith(extension) else name
+    return name
+
+
 def parse_xacro_arguments(texts, *, path=''):
     """Return {name: value} of xacro arguments written 'name:=value'."""
     arguments = {}

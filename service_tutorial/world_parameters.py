@@ -194,7 +194,8 @@ WORLD_PARAMETERS = (
         minimum=0.0),
     ParameterSpec(
         'models', ['tinybot.urdf'],
-        "Models spawned at start-up: files in the package's models/ folder or absolute paths",
+        "Models spawned at start-up: URDF or xacro files in the package's models/ folder or "
+        'absolute paths',
         non_empty_items=True, read_only=True),
     ParameterSpec(
         'model_names', ['tinybot'],

@@ -4,7 +4,8 @@ import os
 
 from lxml import etree
 import pytest
-from service_tutorial.robot_files import parse_xacro_arguments, read_robot_file
+from service_tutorial.robot_files import file_model_name, parse_xacro_arguments
+from service_tutorial.robot_files import read_robot_file
 from service_tutorial.robot_files import RobotFileError
 
 TEST_MODELS = os.path.join(os.path.dirname(os.path.abspath(__file__)), 'models')
@@ -56,6 +57,13 @@ def test_the_arguments_handed_in_are_left_as_they_were():
     assert mast_size(read_robot_file(MAST, arguments)) == '0.01 0.01 0.3'
     assert arguments == {'mast_height': '0.3'}
     assert mast_size(read_robot_file(MAST)) == '0.01 0.01 0.2'
+
+
+def test_a_file_suggests_its_model_name_without_urdf_and_xacro_extensions():
+    assert file_model_name('/a/tinybot.urdf') == 'tinybot'
+    assert file_model_name('robot.urdf.xacro') == 'robot'
+    assert file_model_name('tinybot_diff.xacro') == 'tinybot_diff'
+    assert file_model_name('arm.sdf') == 'arm.sdf'
 
 
 def test_arguments_are_name_colon_equals_value():
