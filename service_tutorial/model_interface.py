@@ -98,8 +98,8 @@ class DriveInterface:
         """Hand a velocity command to the drive; the next steps apply it."""
         name = self.model.name
         try:
-            commanded = (finite_number(msg.linear.x, 'linear.x'),
-                         finite_number(msg.angular.z, 'angular.z'))
+            commanded = (finite_number(msg.linear.x, 'linear_x'),
+                         finite_number(msg.angular.z, 'angular_z'))
             applied = self.drive.command_velocity(*commanded)
         except WorldError as error:
             self.node.get_logger().warning(
