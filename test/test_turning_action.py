@@ -1,9 +1,11 @@
 """The turning action server through turn_robot, turning tinybot in the MuJoCo world."""
 
 import math
+import os
 
 from action_msgs.msg import GoalStatus
 from action_msgs.srv import CancelGoal
+from ament_index_python.packages import get_package_prefix
 from geometry_msgs.msg import Twist
 import pytest
 from rcl_interfaces.msg import Parameter as ParameterMsg, ParameterType, ParameterValue
@@ -308,3 +310,11 @@ def test_a_goal_without_odometry_is_aborted_with_the_reason(ros):
     assert response.status == GoalStatus.STATUS_ABORTED
     assert response.result.message.startswith('no odometry on /odom for 0.2 s')
     assert response.result.angle_turned == 0.0
+
+
+def test_both_programs_are_executables_of_the_package():
+    # What `ros2 pkg executables service_tutorial` lists: the executable files in lib/<package>.
+    directory = os.path.join(get_package_prefix('service_tutorial'), 'lib', 'service_tutorial')
+    executables = {name for name in os.listdir(directory)
+                   if os.access(os.path.join(directory, name), os.X_OK)}
+    assert {'robot_turning_action_server', 'robot_turning_action_client'} <= executables
