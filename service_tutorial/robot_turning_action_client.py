@@ -96,8 +96,12 @@ class RobotTurningActionClient(Node):
 
     def feedback_callback(self, feedback_msg):
         """Show how far the robot has turned."""
-        print(progress_text(feedback_msg.feedback, self.angle),
-              end='\r' if self.on_terminal else '\n', flush=True)
+        text = progress_text(feedback_msg.feedback, self.angle)
+        if self.on_terminal:
+            # Back to the start of the line, write, clear what a longer report left behind.
+            print(f'\r{text}\x1b[K', end='', flush=True)
+        else:
+            print(text, flush=True)
         self.progress_shown = True
 
     def end_progress(self):

@@ -84,13 +84,16 @@ class RobotTurningActionServer(Node):
         self.declare_parameter('max_angle', MAX_ANGLE, ParameterDescriptor(
             description='largest |angle| accepted, in rad (default: ten turns)',
             floating_point_range=double_range(0.0, MAX_ANGLE)))
-        self.declare_parameter('angle_tolerance', 0.005, ParameterDescriptor(
+        self.declare_parameter('angle_tolerance', 0.002, ParameterDescriptor(
             description='a turn is done once the robot is this close to its target, in rad',
             floating_point_range=double_range(0.0001, 0.1)))
         self.declare_parameter('deceleration', 1.0, ParameterDescriptor(
-            description='how gently the robot slows down near the target, in rad/s^2: it '
-                        'turns at most sqrt(2 * deceleration * angle remaining) rad/s',
+            description='how gently the robot slows down near the target, in rad/s^2',
             floating_point_range=double_range(0.01, 100.0)))
+        self.declare_parameter('response_time', 0.2, ParameterDescriptor(
+            description='how long the robot takes to answer a command as seen in odom, in s: '
+                        'near the target it slows down early enough for that',
+            floating_point_range=double_range(0.0, 2.0)))
         self.declare_parameter('odom_timeout', 1.0, ParameterDescriptor(
             description='a goal is aborted when odom has been silent this long, in s',
             floating_point_range=double_range(0.1, 60.0)))
@@ -110,7 +113,8 @@ class RobotTurningActionServer(Node):
         # runs it as a task of the executor, so the server keeps taking odometry, cancels and
         # newer goals meanwhile.
         self.cmd_vel_pub = self.create_publisher(Twist, 'cmd_vel', 10)
-        self.odom_sub = self.create_subscription(Odometry, 'odom', self.odom_callback, 10)
+        # Only the newest odometry matters: a slow turn of the executor skips stale ones.
+        self.odom_sub = self.create_subscription(Odometry, 'odom', self.odom_callback, 1)
         self.turn_robot_server = ActionServer(
             self, TurnRobot, 'turn_robot', self.execute_callback,
             goal_callback=self.goal_callback,
@@ -216,8 +220,13 @@ class RobotTurningActionServer(Node):
             self.stop(turn, Outcome.SUCCEEDED, 'reached the goal')
             return
         deceleration = self.get_parameter('deceleration').value
-        # Fast enough to stop in the angle left at the chosen deceleration, no faster.
-        speed = min(turn.top_speed, math.sqrt(2.0 * deceleration * abs(remaining)))
+        response_time = self.get_parameter('response_time').value
+        # The fastest speed from which the robot still stops in the angle left, although it
+        # goes on for response_time before it slows down at the chosen deceleration:
+        # remaining = speed * response_time + speed**2 / (2 * deceleration).
+        stopping_speed = deceleration * (
+            math.sqrt(response_time**2 + 2.0 * abs(remaining) / deceleration) - response_time)
+        speed = min(turn.top_speed, stopping_speed)
         command = Twist()
         command.angular.z = math.copysign(speed, remaining)
         self.cmd_vel_pub.publish(command)

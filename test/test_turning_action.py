@@ -270,7 +270,7 @@ def test_the_limits_are_inclusive_and_a_zero_turn_succeeds_at_once(action_world)
 
 def test_parameters_are_described_and_held_to_their_ranges(ros):
     ros.add_node(RobotTurningActionServer())
-    names = ['max_angular_vel', 'max_angle', 'angle_tolerance', 'deceleration',
+    names = ['max_angular_vel', 'max_angle', 'angle_tolerance', 'deceleration', 'response_time',
              'odom_timeout', 'feedback_rate']
 
     described = ros.call(DescribeParameters, '/robot_turning_action_server/describe_parameters',
