@@ -10,6 +10,7 @@ turned) is printed, and the program exits.
 
 import argparse
 import math
+import os
 import sys
 import threading
 
@@ -34,8 +35,8 @@ STATUS_NAMES = {getattr(GoalStatus, name): name[len('STATUS_'):]
                 for name in dir(GoalStatus) if name.startswith('STATUS_')}
 
 
-class ActionServerGoneError(RuntimeError):
-    """The action server disappeared before it answered."""
+class FollowError(RuntimeError):
+    """The goal cannot be followed any more: the server went away, or the node stopped."""
 
 
 def parse_turning_goal(angle_text, velocity_text):
@@ -80,6 +81,16 @@ class RobotTurningActionClient(Node):
         # On a terminal each report overwrites the last; in a pipe each gets a line.
         self.on_terminal = sys.stdout.isatty()
         self.progress_shown = False
+        self.output_closed = False
+        self.spinner = None
+
+    def spin_in_background(self):
+        """Spin in a thread of its own, leaving the main thread free to take Ctrl-C at once."""
+        executor = SingleThreadedExecutor(context=self.context)
+        executor.add_node(self)
+        self.spinner = threading.Thread(target=executor.spin, daemon=True)
+        self.spinner.start()
+        return executor
 
     def wait_for_server(self):
         """Wait until the action server is up, saying so; False if ROS shut down first."""
@@ -97,11 +108,15 @@ class RobotTurningActionClient(Node):
     def feedback_callback(self, feedback_msg):
         """Show how far the robot has turned."""
         text = progress_text(feedback_msg.feedback, self.angle)
-        if self.on_terminal:
-            # Back to the start of the line, write, clear what a longer report left behind.
-            print(f'\r{text}\x1b[K', end='', flush=True)
-        else:
-            print(text, flush=True)
+        try:
+            if self.on_terminal:
+                # Back to the start of the line, write, clear what a longer report left.
+                print(f'\r{text}\x1b[K', end='', flush=True)
+            else:
+                print(text, flush=True)
+        except BrokenPipeError:
+            # The reader has gone (`| head`); the main thread ends the program.
+            self.output_closed = True
         self.progress_shown = True
 
     def end_progress(self):
@@ -111,13 +126,17 @@ class RobotTurningActionClient(Node):
         self.progress_shown = False
 
     def wait(self, future):
-        """Wait for a future another thread completes; Ctrl-C interrupts the wait."""
+        """Wait for a future the spinning thread completes; Ctrl-C interrupts the wait."""
         done = threading.Event()
         future.add_done_callback(lambda _: done.set())
-        # Event.wait gives way to Ctrl-C at once; the periodic look notices a vanished server.
+        # Event.wait gives way to Ctrl-C at once; a look now and then notices what went wrong.
         while not done.wait(1.0):
+            if self.output_closed:
+                raise BrokenPipeError('standard output was closed')
+            if not self.spinner.is_alive():
+                raise FollowError('the node stopped spinning (the error is above)')
             if not self.turn_robot_client.server_is_ready():
-                raise ActionServerGoneError(f'{self.action_name} went away before answering')
+                raise FollowError(f'{self.action_name} went away before answering')
         return future.result()
 
     def turn(self, angle, angular_vel):
@@ -184,14 +203,11 @@ def main(args=None):
     # Ctrl-C must not shut ROS down: the cancel still has to reach the server. The node spins
     # in a thread of its own and the main thread waits, where Ctrl-C interrupts it at once.
     rclpy.init(args=args, signal_handler_options=SignalHandlerOptions.NO)
-    node = executor = spinner = None
+    node = executor = None
     status = 1
     try:
         node = RobotTurningActionClient()
-        executor = SingleThreadedExecutor()
-        executor.add_node(node)
-        spinner = threading.Thread(target=executor.spin, daemon=True)
-        spinner.start()
+        executor = node.spin_in_background()
         if node.wait_for_server():
             goal_status, result = node.turn(*goal)
             if result is None:
@@ -200,15 +216,17 @@ def main(args=None):
                 print(f'status: {STATUS_NAMES.get(goal_status, goal_status)}')
                 print(response_text(result))
                 status = 0 if goal_status == GoalStatus.STATUS_SUCCEEDED else 1
-    except ActionServerGoneError as error:
+    except FollowError as error:
         print(f'robot_turning_action_client: {error}', file=sys.stderr)
+    except BrokenPipeError:
+        # Nobody reads the output any more; keep Python from failing to flush it at exit.
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
     finally:
         if executor is not None:
             executor.shutdown()
-        if spinner is not None:
-            spinner.join()
+            node.spinner.join()
         if node is not None:
             node.destroy_node()
         rclpy.try_shutdown()

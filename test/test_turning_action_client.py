@@ -191,3 +191,23 @@ def test_ctrl_c_cancels_the_goal_and_tinybot_stops(action_world):
     turned = math.remainder(truth.last - before, math.tau)
     assert 0.2 < reported < 1.9
     assert reported == pytest.approx(turned, abs=0.02)
+
+
+@pytest.mark.ros
+def test_a_reader_that_goes_away_ends_the_client_quietly(action_world):
+    client = subprocess.Popen([CLIENT, '2.0', '0.5'], stdout=subprocess.PIPE,
+                              stderr=subprocess.PIPE, text=True)
+    try:
+        for line in client.stdout:
+            if progress(line):
+                break
+        client.stdout.close()  # as `robot_turning_action_client 2.0 0.5 | head -2` would
+        errors = client.stderr.read()
+        assert client.wait(timeout=30) == 1
+    finally:
+        if client.poll() is None:
+            client.kill()
+            client.wait()
+        client.stderr.close()
+
+    assert 'Traceback' not in errors
