@@ -60,12 +60,9 @@ class Turn:
         self.stopped_at = None
         self.done = Future()  # set to (Outcome, message) when the goal is over
 
-    def message(self, outcome, reason):
+    def message(self, reason):
         """Say how the goal ended, with what was turned."""
-        turned = f'turned {self.turned:.4f} rad of {self.angle:.4f} rad'
-        if outcome is Outcome.SUCCEEDED:
-            return f'reached the goal: {turned}'
-        return f'{reason}: {turned}'
+        return f'{reason}: turned {self.turned:.4f} rad of {self.angle:.4f} rad'
 
 
 def double_range(low, high):
@@ -239,7 +236,7 @@ class RobotTurningActionServer(Node):
 
     def finish(self, turn, outcome, reason):
         """End a goal: its execute callback records the outcome and returns the result."""
-        message = turn.message(outcome, reason)
+        message = turn.message(reason)
         if outcome is Outcome.ABORTED:
             self.get_logger().warning(message)
         else:
