@@ -10,7 +10,10 @@ as JSON (output/benchmark.json unless --json says otherwise). What runs where:
 - free-running speed, real-time factor, start-up and turning accuracy: the installed
   mujoco_world console script (and robot_turning_server) as separate processes, as users run
   them, observed from this process;
-- raw physics and core operations: service_tutorial.world.World in this process, no ROS.
+- raw physics and core operations: service_tutorial.sim.world.World in this process, no ROS;
+- the camera's cost: mujoco_world as a process, streaming to a subscriber here;
+- answers that need no simulation: model_services without a world, and robot_turning_server
+  in this process.
 
 Run it with scripts/benchmark [--quick] [--json PATH].
 """
@@ -35,10 +38,12 @@ import time
 
 import mujoco
 import numpy as np
-from service_tutorial.ros_isolation import isolate_ros_graph
 import yaml
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+# The tests' way of keeping a run's ROS graph to itself (test/ is not a package).
+sys.path.insert(0, os.path.join(ROOT, 'test'))
+from ros_isolation import isolate_ros_graph  # noqa: E402, I100
 DEFAULT_JSON = os.path.join(ROOT, 'output', 'benchmark.json')
 PACKAGE = 'service_tutorial'
 WORLD_SERVICES = ('spawn_urdf_model', 'delete_model', 'reset_simulation', 'reset_world',
@@ -81,13 +86,18 @@ class Config:
     turning_rtf: float = 2.0               # real_time_factor of the turning grid's world
     turning_check_rtfs: tuple = (1.0, 2.0, 5.0, 0.0)  # real_time_factor check of one turn
     turning_check_point: tuple = (2, 1.0)  # (s, rad/s) of that check
+    core_spawns: int = 5                   # R2-D2s spawned into a World in this process
+    step_rounds: int = 5                   # World.step against bare mj_step, best of
+    step_count: int = 1000                 # steps per round
+    camera_window: float = 2.0             # wall s of streaming camera measured
     log_path: str = os.path.join(tempfile.gettempdir(), 'world_benchmark-nodes.log')
 
 
 QUICK = Config(calls=5, growth_counts=(1, 2), growth_calls=3, robot_counts=(1,),
                speed_window=0.3, speed_rounds=1, speed_settle=0.1, real_time_window=0.3,
                warm_up=0.2, startup_runs=1,
-               durations=(1,), velocities=(0.5,), turning_rtf=4.0, turning_check_rtfs=())
+               durations=(1,), velocities=(0.5,), turning_rtf=4.0, turning_check_rtfs=(),
+               core_spawns=3, step_rounds=2, step_count=200, camera_window=0.3)
 
 
 @dataclass
@@ -207,11 +217,11 @@ def fleet_parameters(count, real_time_factor):
 
 def core_fleet(count, *, driving):
     """Return a ROS-free World holding the same fleet, driving like the node's fleet."""
-    from service_tutorial.world import World
+    from service_tutorial.sim.world import World
     world = World(cmd_vel_timeout=0.0)
     path = model_path('tinybot')
     for index, name in enumerate(fleet_names(count)):
-        world.spawn_urdf_file(name, path, position=fleet_position(index), namespace=name)
+        world.spawn_urdf_file(name, path, position=fleet_position(index))
         if driving:
             world.command_velocity(name, DRIVE_LINEAR_X, DRIVE_ANGULAR_Z)
     return world
@@ -358,6 +368,7 @@ class NodeProcess:
 
 def sim_time_sample(observer, model_name):
     """Return (simulation time, wall time) from one get_model_state round trip."""
+    from service_tutorial.conversions import seconds_of
     from srv_interfaces.srv import GetModelState
     start = time.monotonic()
     response = observer.call(GetModelState, '/mujoco/get_model_state',
@@ -365,8 +376,7 @@ def sim_time_sample(observer, model_name):
     end = time.monotonic()
     if not response.success:
         raise BenchmarkError(f'get_model_state {model_name}: {response.status_message}')
-    stamp = response.header.stamp
-    return stamp.sec + stamp.nanosec * 1e-9, 0.5 * (start + end), response
+    return seconds_of(response.header.stamp), 0.5 * (start + end), response
 
 
 def wait_for_world(observer, process, model_name):
@@ -458,11 +468,9 @@ class TrivialService:
 def spawn_request(index):
     """Return a request that spawns R2-D2 where the lesson does."""
     from geometry_msgs.msg import Pose
+    from service_tutorial.conversions import fill_pose_msg
     from srv_interfaces.srv import SpawnModel
-    pose = Pose()
-    pose.position.x, pose.position.y, pose.position.z = LESSON_POSITION
-    q = pose.orientation
-    q.w, q.x, q.y, q.z = LESSON_ORIENTATION
+    pose = fill_pose_msg(Pose(), LESSON_POSITION, LESSON_ORIENTATION)
     return SpawnModel.Request(model_name='r2d2', model_xml=read_model('r2d2'),
                               initial_pose=pose, reference_frame='world')
 
@@ -822,12 +830,6 @@ def startup_table(observer, config):
 # ------------------------------------------------------------------------ turning
 
 
-def yaw_of(orientation):
-    """Return the yaw of a geometry_msgs/Quaternion."""
-    q = orientation
-    return math.atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z))
-
-
 class YawTracker:
     """Unwraps yaw samples into the total angle turned; samples must be under pi apart."""
 
@@ -845,6 +847,7 @@ class YawTracker:
 
 def measure_turn(observer, duration, angular_vel):
     """Turn tinybot through /control_robot_angle; return the angle it really turned."""
+    from service_tutorial.conversions import yaw_of
     from srv_interfaces.srv import ControlTurningMessage
     _, _, state = sim_time_sample(observer, 'tinybot')
     tracker = YawTracker(yaw_of(state.pose.orientation))
@@ -935,6 +938,139 @@ def turning_tables(observer, config):
     return tables
 
 
+# ------------------------------------------------------------ core, camera and answers
+
+
+def core_table(config):
+    """Measure spawning into and stepping a World in this process, no ROS, against limits."""
+    from service_tutorial.sim.world import World
+    world = World()
+    world.spawn_urdf_file('tinybot', model_path('tinybot'))
+    world.step(250)
+    spawns = []
+    for index in range(config.core_spawns):
+        start = time.perf_counter()
+        world.spawn_urdf_file(f'r2d2_{index}', model_path('r2d2'),
+                              position=(2.0 + index, 0.0, 0.0))
+        spawns.append(time.perf_counter() - start)
+    model, data = world.model, world.data
+    kind = mujoco.mjtState.mjSTATE_INTEGRATION
+    raw = mujoco.MjData(model)
+    state = np.empty(mujoco.mj_stateSize(model, kind))
+    mujoco.mj_getState(model, data, state, kind)
+    mujoco.mj_setState(model, raw, state, kind)
+    world_best = raw_best = math.inf
+    for _ in range(config.step_rounds):
+        start = time.perf_counter()
+        world.step(config.step_count)
+        world_best = min(world_best, time.perf_counter() - start)
+        start = time.perf_counter()
+        mujoco.mj_step(model, raw, config.step_count)
+        raw_best = min(raw_best, time.perf_counter() - start)
+    spawn_p50, ratio = median_ms(spawns), world_best / raw_best
+    table = Table('core', 'World in this process, no ROS: tinybot, then R2-D2s beside it', [
+        ('figure', ''), ('measured', '.3f'), ('limit', '.2f'), ('within', '')])
+    table.rows = [
+        [f'spawn R2-D2 p50 of {len(spawns)} (ms)', spawn_p50, 50.0, spawn_p50 < 50.0],
+        [f'World.step / bare mj_step time, best of {config.step_rounds} x '
+         f'{config.step_count} steps', ratio, 1.5, ratio < 1.5]]
+    table.note = ('the world grows by one R2-D2 a spawn; World.step and mj_step step the same '
+                  'model from the same state (they stay bit for bit equal, see test_world.py)')
+    return table
+
+
+def wait_for_count(counter, process, what, *, timeout=30.0):
+    """Wait until a message counter has counted one; fail early if the process exits."""
+    deadline = time.monotonic() + timeout
+    while counter[0] == 0:
+        process.check()
+        if time.monotonic() > deadline:
+            raise BenchmarkError(f'no {what} within {timeout} s')
+        time.sleep(0.01)
+
+
+def camera_table(observer, config):
+    """Measure the pace the world keeps while its camera streams to a subscriber."""
+    from sensor_msgs.msg import Image
+    from srv_interfaces.srv import GetModelState
+    parameters = {'camera_enabled': True, 'camera_rate': 5.0, 'camera_width': 160,
+                  'camera_height': 120}
+    with NodeProcess('mujoco_world', node_name='mujoco', parameters=parameters) as process:
+        wait_for_world(observer, process, 'tinybot')
+        frames, subscription = observer.counter(Image, '/mujoco/camera/image_raw')
+        try:
+            wait_for_count(frames, process, 'camera image')
+            first = frames[0]
+            sim_start, wall_start, _ = sim_time_sample(observer, 'tinybot')
+            time.sleep(config.camera_window)
+            sim_end, wall_end, _ = sim_time_sample(observer, 'tinybot')
+            count = frames[0] - first
+        finally:
+            observer.node.destroy_subscription(subscription)
+    wait_until_gone(observer, GetModelState, '/mujoco/get_model_state')
+    simulated = max(sim_end - sim_start, 1e-9)
+    factor = simulated / (wall_end - wall_start)
+    table = Table('camera', 'Camera streaming 160x120 at 5 Hz to a subscriber, '
+                  'real_time_factor 1', [
+                      ('achieved factor', '.3f'), ('frames per simulated s', '.2f'),
+                      ('limit factor', '.1f'), ('within', '')])
+    table.rows.append([factor, count / simulated, 0.3, factor > 0.3])
+    table.note = ('the mujoco_world executable; frames are rendered on the stepping thread, '
+                  'so a slow (software) renderer holds the simulation back')
+    return table
+
+
+def answers_table(observer, config):
+    """Time how soon a missing service is reported and a turn without turning answered."""
+    from rclpy.executors import SingleThreadedExecutor
+    from rclpy.node import Node
+    from service_tutorial.model_services import delete_model, ServiceUnavailableError
+    from service_tutorial.robot_turning_server import RobotTurningServer
+    from srv_interfaces.srv import ControlTurningMessage
+    table = Table('answers', 'Answers that need no simulation (s)', [
+        ('call', ''), ('took', '.3f'), ('limit', '.1f'), ('within', '')])
+    script = Node('benchmark_script', namespace='/nowhere')  # no world in this namespace
+    try:
+        start = time.monotonic()
+        try:
+            delete_model(script, 'r2d2', timeout=0.5)
+            raise BenchmarkError('delete_model found a world under /nowhere')
+        except ServiceUnavailableError:
+            took = time.monotonic() - start
+    finally:
+        script.destroy_node()
+    table.rows.append(['model_services.delete_model, no world, timeout 0.5 s', took, 1.5,
+                       took < 1.5])
+    with quiet_console(config.log_path):
+        server = RobotTurningServer()
+        executor = SingleThreadedExecutor()
+        executor.add_node(server)
+        thread = threading.Thread(target=executor.spin, daemon=True)
+        thread.start()
+        try:
+            observer.wait_for_service(ControlTurningMessage, '/control_robot_angle')
+            for what, duration, velocity, success in (
+                    ('refused: 1 s at 1.6 rad/s', 1, 1.6, False),
+                    ('zero-length turn', 0, 1.0, True)):
+                start = time.monotonic()
+                response = observer.call(ControlTurningMessage, '/control_robot_angle',
+                                         ControlTurningMessage.Request(
+                                             time_duration=duration, angular_vel=velocity))
+                took = time.monotonic() - start
+                if response.success != success:
+                    raise BenchmarkError(f'/control_robot_angle {what}: success '
+                                         f'{response.success}')
+                table.rows.append([f'/control_robot_angle, {what}', took, 2.0, took < 2.0])
+        finally:
+            executor.shutdown(timeout_sec=5.0)
+            thread.join(timeout=5.0)
+            server.destroy_node()
+    wait_until_gone(observer, ControlTurningMessage, '/control_robot_angle')
+    table.note = ('the turning server in this process, on an executor thread of its own; '
+                  'neither answer waits for a turn')
+    return table
+
+
 # ------------------------------------------------------------------------ report
 
 
@@ -965,7 +1101,8 @@ def targets(tables):
                                         ('holds', '')], rows)
 
 
-SECTIONS = ('round_trips', 'spawn_growth', 'speed', 'startup', 'turning')
+SECTIONS = ('round_trips', 'spawn_growth', 'speed', 'startup', 'turning', 'core', 'camera',
+            'answers')
 
 
 def run(config, *, sections=SECTIONS, report=print):
@@ -988,6 +1125,12 @@ def run(config, *, sections=SECTIONS, report=print):
             add(startup_table(observer, config))
         if 'turning' in sections:
             add(*turning_tables(observer, config))
+        if 'core' in sections:
+            add(core_table(config))
+        if 'camera' in sections:
+            add(camera_table(observer, config))
+        if 'answers' in sections:
+            add(answers_table(observer, config))
     finally:
         observer.close()
     add(targets(tables))

@@ -13,38 +13,33 @@ import math
 import os
 import time
 
-from rclpy.time import Time
 from sensor_msgs.msg import CameraInfo, Image
+from service_tutorial.conversions import time_msg
 from service_tutorial.image_files import write_png
-from service_tutorial.rendering import SceneCamera
+from service_tutorial.sim.rendering import SceneCamera
 from std_srvs.srv import Trigger
 
 CAMERA_FRAME = 'camera_optical_frame'  # z forward, x right, y down (REP 103, optical frames)
 SUBSCRIBER_CHECK_PERIOD = 0.2  # s of wall time between two looks for a first subscriber
 
 
-def stamp_msg(seconds):
-    """Convert simulation seconds to a builtin_interfaces/Time."""
-    return Time(nanoseconds=int(round(seconds * 1e9))).to_msg()
-
-
 class CameraStream:
     """Renders the world for ~/camera/image_raw and ~/camera/camera_info, and snapshots."""
 
-    def __init__(self, node, world):
-        param = node.get_parameter
+    def __init__(self, node, world, parameters):
+        """Make the camera from the node's camera_* parameters (a dict of values)."""
         self.node = node
         self.world = world
-        self.enabled = bool(param('camera_enabled').value)
-        rate = float(param('camera_rate').value)
+        self.enabled = bool(parameters['camera_enabled'])
+        rate = float(parameters['camera_rate'])
         if self.enabled and not rate > 0.0:
             raise ValueError(f'camera_rate must be above 0 Hz, got {rate}')
         self.period = 1.0 / rate if self.enabled else math.inf
         self.camera = SceneCamera(
-            param('camera_width').value, param('camera_height').value,
-            list(param('camera_position').value), list(param('camera_look_at').value),
-            param('camera_fovy').value)
-        self.snapshot_directory = param('snapshot_directory').value or os.getcwd()
+            parameters['camera_width'], parameters['camera_height'],
+            list(parameters['camera_position']), list(parameters['camera_look_at']),
+            parameters['camera_fovy'])
+        self.snapshot_directory = parameters['snapshot_directory'] or os.getcwd()
         self.next_due = math.inf  # simulation time of the next frame; inf: nobody listens
         self._next_subscriber_check = 0.0
         self.image_pub = self.info_pub = None
@@ -90,7 +85,7 @@ class CameraStream:
         """Render the world as a sensor_msgs/Image (rgb8) stamped with simulation time."""
         pixels = self.camera.render(self.world.model, self.world.data)
         msg = Image()
-        msg.header.stamp = stamp_msg(now)
+        msg.header.stamp = time_msg(now)
         msg.header.frame_id = CAMERA_FRAME
         msg.height, msg.width = pixels.shape[:2]
         msg.encoding = 'rgb8'
@@ -102,7 +97,7 @@ class CameraStream:
     def camera_info(self, now):
         """Describe the pinhole camera: no distortion, square pixels, K from fovy and size."""
         msg = CameraInfo()
-        msg.header.stamp = stamp_msg(now)
+        msg.header.stamp = time_msg(now)
         msg.header.frame_id = CAMERA_FRAME
         msg.height, msg.width = self.camera.height, self.camera.width
         msg.distortion_model = 'plumb_bob'

@@ -6,49 +6,32 @@ for machines without the ros2 command; with it, the same call is
 `ros2 service call /mujoco/delete_model srv_interfaces/srv/DeleteModel "{model_name: 'r2d2'}"`.
 """
 
-import argparse
 import sys
 
-import rclpy
-from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
-from rclpy.utilities import remove_ros_args
 
-from service_tutorial.model_services import DEFAULT_TIMEOUT, delete_model, response_text
+from service_tutorial.client_main import parse_client_arguments, program_arguments, run_node
+from service_tutorial.model_services import delete_model, response_text
 
 
 def parse_arguments(argv):
     """Read the command line (ROS arguments already removed)."""
-    parser = argparse.ArgumentParser(
-        prog='delete_model_client', description='Delete a model through /mujoco/delete_model.')
-    parser.add_argument('model_name', nargs='?', default='r2d2',
-                        help='model to delete (default: %(default)s)')
-    parser.add_argument('--timeout', type=float, default=DEFAULT_TIMEOUT,
-                        help='seconds to wait for the service and its answer '
-                             '(default: %(default)s)')
-    return parser.parse_args(argv)
+    return parse_client_arguments(
+        argv, 'delete_model_client', 'Delete a model through /mujoco/delete_model.',
+        lambda parser: parser.add_argument('model_name', nargs='?', default='r2d2',
+                                           help='model to delete (default: %(default)s)'))
 
 
 def main(args=None):
     """Delete one model, print the response, exit with status 0 if the world deleted it."""
-    options = parse_arguments(remove_ros_args(sys.argv if args is None else args)[1:])
-    rclpy.init(args=args)
-    node = None
-    status = 1
-    try:
-        node = Node('delete_model_client')
+    options = parse_arguments(program_arguments(args))
+
+    def delete(node):
         response = delete_model(node, options.model_name, timeout=options.timeout)
         print(response_text(response))
-        status = 0 if response.success else 1
-    except TimeoutError as error:
-        print(f'delete_model_client: {error}', file=sys.stderr)
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    finally:
-        if node is not None:
-            node.destroy_node()
-        rclpy.try_shutdown()
-    return status
+        return 0 if response.success else 1
+    return run_node(lambda: Node('delete_model_client'), delete, args=args,
+                    program='delete_model_client', errors=(TimeoutError,))
 
 
 if __name__ == '__main__':

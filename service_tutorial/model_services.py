@@ -21,7 +21,6 @@ so its answer never waits behind the calling callback) or await client.call_asyn
 async callback.
 """
 
-import math
 import os
 import threading
 import time
@@ -53,27 +52,6 @@ class ServiceTimeoutError(TimeoutError):
 def model_path(file_name, *, package=PACKAGE):
     """Return the path of a model file in a package's share/<package>/models folder."""
     return os.path.join(get_package_share_directory(package), 'models', file_name)
-
-
-def make_pose(x=0.0, y=0.0, z=0.0, *, yaw=None, quaternion=None):
-    """Build a geometry_msgs/Pose from a position and a yaw or an (x, y, z, w) quaternion."""
-    if yaw is not None and quaternion is not None:
-        raise ValueError('give the orientation as yaw or as quaternion, not both')
-    if quaternion is None:
-        yaw = 0.0 if yaw is None else yaw
-        quaternion = (0.0, 0.0, math.sin(yaw / 2), math.cos(yaw / 2))
-    pose = Pose()
-    pose.position.x, pose.position.y, pose.position.z = float(x), float(y), float(z)
-    q = pose.orientation
-    q.x, q.y, q.z, q.w = (float(value) for value in quaternion)
-    return pose
-
-
-def yaw_of(pose):
-    """Return the heading (rotation about z, in rad) of a geometry_msgs/Pose."""
-    q = pose.orientation
-    # This form needs no unit quaternion: the lesson's (0, 0, -0.707, 0.707) gives -pi/2.
-    return math.atan2(2.0 * (q.w * q.z + q.x * q.y), q.w * q.w + q.x * q.x - q.y * q.y - q.z * q.z)
 
 
 def response_text(response):
@@ -151,7 +129,8 @@ def spawn_model(node, name, *, model_xml=None, model_file=None, pose=None, names
     Spawn a URDF model in the world; return the SpawnModel response.
 
     Give the URDF as text (model_xml) or as a path (model_file). pose is a geometry_msgs/Pose
-    in reference_frame (default: the origin); namespace puts the model's topics under it.
+    in reference_frame (default: the origin; conversions.make_pose builds one); namespace puts
+    the model's topics under it.
     """
     if (model_xml is None) == (model_file is None):
         raise ValueError('give the model as model_xml or as model_file, exactly one of them')

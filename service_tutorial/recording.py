@@ -14,6 +14,7 @@ import time
 from nav_msgs.msg import Odometry
 import numpy as np
 from sensor_msgs.msg import Image
+from service_tutorial.conversions import seconds_of, yaw_of
 from service_tutorial.image_files import write_animation
 from service_tutorial.trajectory_plot import write_trajectory_plot
 
@@ -21,17 +22,6 @@ ANIMATION_FILE = 'turning.gif'
 TRAJECTORY_FILE = 'trajectory.svg'
 CAMERA_IMAGE_TOPIC = '/mujoco/camera/image_raw'
 MAX_ODOMETRY_SAMPLES = 200_000  # over an hour of odometry at 50 Hz
-
-
-def seconds(stamp):
-    """Convert a builtin_interfaces/Time to seconds."""
-    return stamp.sec + stamp.nanosec * 1e-9
-
-
-def yaw_of(orientation):
-    """Heading (rad) about z of a geometry_msgs/Quaternion."""
-    q = orientation
-    return math.atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z))
 
 
 def image_pixels(msg):
@@ -71,7 +61,7 @@ class TurnRecorder:
 
     def image_callback(self, msg):
         """Keep a frame if its stamp is one frame period after the last one kept."""
-        stamp = seconds(msg.header.stamp)
+        stamp = seconds_of(msg.header.stamp)
         wait = self._next_frame_time - stamp
         if wait > self.frame_period + 1e-6:
             wait = -math.inf  # the clock went back (a reset): start afresh from this frame
@@ -90,7 +80,7 @@ class TurnRecorder:
         if len(self.odometry) >= MAX_ODOMETRY_SAMPLES:
             return
         pose = msg.pose.pose
-        self.odometry.append((seconds(msg.header.stamp), pose.position.x, pose.position.y,
+        self.odometry.append((seconds_of(msg.header.stamp), pose.position.x, pose.position.y,
                               yaw_of(pose.orientation)))
 
     def wait_for_frame(self, timeout):

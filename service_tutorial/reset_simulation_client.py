@@ -5,48 +5,30 @@ The counterpart of `rosservice call /gazebo/reset_simulation` for machines witho
 command; with it: `ros2 service call /mujoco/reset_simulation std_srvs/srv/Empty`.
 """
 
-import argparse
 import sys
 
-import rclpy
-from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
-from rclpy.utilities import remove_ros_args
 
-from service_tutorial.model_services import DEFAULT_TIMEOUT, reset_simulation
+from service_tutorial.client_main import parse_client_arguments, program_arguments, run_node
+from service_tutorial.model_services import reset_simulation
 
 
 def parse_arguments(argv):
     """Read the command line (ROS arguments already removed)."""
-    parser = argparse.ArgumentParser(
-        prog='reset_simulation_client',
-        description='Reset the simulation through /mujoco/reset_simulation.')
-    parser.add_argument('--timeout', type=float, default=DEFAULT_TIMEOUT,
-                        help='seconds to wait for the service and its answer '
-                             '(default: %(default)s)')
-    return parser.parse_args(argv)
+    return parse_client_arguments(argv, 'reset_simulation_client',
+                                  'Reset the simulation through /mujoco/reset_simulation.')
 
 
 def main(args=None):
     """Reset the simulation; exit with status 0 once the world has done it."""
-    options = parse_arguments(remove_ros_args(sys.argv if args is None else args)[1:])
-    rclpy.init(args=args)
-    node = None
-    status = 1
-    try:
-        node = Node('reset_simulation_client')
+    options = parse_arguments(program_arguments(args))
+
+    def reset(node):
         reset_simulation(node, timeout=options.timeout)
         node.get_logger().info('simulation reset')
-        status = 0
-    except TimeoutError as error:
-        print(f'reset_simulation_client: {error}', file=sys.stderr)
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    finally:
-        if node is not None:
-            node.destroy_node()
-        rclpy.try_shutdown()
-    return status
+        return 0
+    return run_node(lambda: Node('reset_simulation_client'), reset, args=args,
+                    program='reset_simulation_client', errors=(TimeoutError,))
 
 
 if __name__ == '__main__':

@@ -11,9 +11,8 @@ import math
 import sys
 
 import rclpy
-from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
-from rclpy.utilities import remove_ros_args
+from service_tutorial.client_main import program_arguments, run_node
 from service_tutorial.model_services import response_text
 from srv_interfaces.srv import ControlTurningMessage
 
@@ -104,7 +103,7 @@ def parse_arguments(argv):
 
 def main(args=None):
     """Ask for one turn and print the answer; exit status 0 when the turn succeeded."""
-    options = parse_arguments(remove_ros_args(sys.argv if args is None else args)[1:])
+    options = parse_arguments(program_arguments(args))
     request = options.request
     if request is None:
         # Prompt before rclpy takes over Ctrl-C, so that Ctrl-C at a prompt stops the program.
@@ -113,24 +112,16 @@ def main(args=None):
         except (EOFError, KeyboardInterrupt):
             print()
             return 1
-    rclpy.init(args=args)
-    node = None
-    status = 1
-    try:
-        node = RobotTurningClient()
-        if node.wait_for_server():
-            future = node.send_request(*request)
-            rclpy.spin_until_future_complete(node, future)
-            response = future.result()
-            print(response_text(response))
-            status = 0 if response.success else 1
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    finally:
-        if node is not None:
-            node.destroy_node()
-        rclpy.try_shutdown()
-    return status
+
+    def turn(node):
+        if not node.wait_for_server():
+            return 1
+        future = node.send_request(*request)
+        rclpy.spin_until_future_complete(node, future)
+        response = future.result()
+        print(response_text(response))
+        return 0 if response.success else 1
+    return run_node(RobotTurningClient, turn, args=args)
 
 
 if __name__ == '__main__':

@@ -15,11 +15,10 @@ import math
 
 from geometry_msgs.msg import Twist
 from rcl_interfaces.msg import ParameterDescriptor
-import rclpy
 from rclpy.callback_groups import ReentrantCallbackGroup
-from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
 from rclpy.task import Future
+from service_tutorial.client_main import spin_node
 from srv_interfaces.srv import ControlTurningMessage
 
 
@@ -153,17 +152,7 @@ class RobotTurningServer(Node):
 
 def main(args=None):
     """Run the turning server until Ctrl-C."""
-    rclpy.init(args=args)
-    node = None
-    try:
-        node = RobotTurningServer()
-        rclpy.spin(node)
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    finally:
-        if node is not None:
-            node.destroy_node()
-        rclpy.try_shutdown()
+    return spin_node(RobotTurningServer, args=args)
 
 
 if __name__ == '__main__':

@@ -6,13 +6,10 @@ and writes the PNG into its snapshot_directory parameter; the request carries no
 ros2 command: `ros2 service call /mujoco/save_snapshot std_srvs/srv/Trigger`.
 """
 
-import argparse
 import sys
 
-import rclpy
-from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
-from rclpy.utilities import remove_ros_args
+from service_tutorial.client_main import parse_client_arguments, program_arguments, run_node
 from service_tutorial.model_services import call, DEFAULT_TIMEOUT
 from std_srvs.srv import Trigger
 
@@ -37,34 +34,20 @@ class SnapshotClient(Node):
 
 def parse_arguments(argv):
     """Read the command line (ROS arguments already removed)."""
-    parser = argparse.ArgumentParser(
-        prog='save_snapshot',
-        description='Have the MuJoCo world write a PNG of its camera view; print its path.')
-    parser.add_argument('--timeout', type=float, default=DEFAULT_TIMEOUT,
-                        help='seconds to wait for the service and its answer '
-                             '(default: %(default)s)')
-    return parser.parse_args(argv)
+    return parse_client_arguments(
+        argv, 'save_snapshot',
+        'Have the MuJoCo world write a PNG of its camera view; print its path.')
 
 
 def main(args=None):
     """Save a snapshot and print its path; exit with status 0 once it is written."""
-    options = parse_arguments(remove_ros_args(sys.argv if args is None else args)[1:])
-    rclpy.init(args=args)
-    node = None
-    status = 1
-    try:
-        node = SnapshotClient()
+    options = parse_arguments(program_arguments(args))
+
+    def save(node):
         print(node.save_snapshot(timeout=options.timeout))
-        status = 0
-    except (TimeoutError, RuntimeError) as error:
-        print(f'save_snapshot: {error}', file=sys.stderr)
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    finally:
-        if node is not None:
-            node.destroy_node()
-        rclpy.try_shutdown()
-    return status
+        return 0
+    return run_node(SnapshotClient, save, args=args, program='save_snapshot',
+                    errors=(TimeoutError, RuntimeError))
 
 
 if __name__ == '__main__':

@@ -6,29 +6,22 @@ the package share and asks the world to put it at (-2, 1, 1), turned -90 degrees
 world frame. Options choose another model, name, pose, namespace or reference frame.
 """
 
-import argparse
 import os
 import sys
 
-import rclpy
-from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
-from rclpy.utilities import remove_ros_args
 
-from service_tutorial.model_services import DEFAULT_TIMEOUT, make_pose, model_path
-from service_tutorial.model_services import response_text, spawn_model
+from service_tutorial.client_main import parse_client_arguments, program_arguments, run_node
+from service_tutorial.conversions import make_pose
+from service_tutorial.model_services import model_path, response_text, spawn_model
 
 # The lesson's pose: z rotation of -pi/2 as a quaternion (x, y, z, w).
 LESSON_POSITION = (-2.0, 1.0, 1.0)
 LESSON_QUATERNION = (0.0, 0.0, -0.707, 0.707)
 
 
-def parse_arguments(argv):
-    """Read the command line (ROS arguments already removed)."""
-    parser = argparse.ArgumentParser(
-        prog='spawn_model_client',
-        description='Spawn a URDF model through /mujoco/spawn_urdf_model '
-                    '(by default R2-D2 where the lesson puts it).')
+def add_spawn_arguments(parser):
+    """Add the model, pose, namespace and frame options to the command-line parser."""
     parser.add_argument('--file', default='r2d2.urdf',
                         help="URDF file: a path, or a file name in this package's models/ "
                              'folder (default: %(default)s)')
@@ -44,10 +37,13 @@ def parse_arguments(argv):
                         help="namespace of the model's topics (default: none)")
     parser.add_argument('--reference-frame', default='world',
                         help='frame the pose is given in (default: %(default)s)')
-    parser.add_argument('--timeout', type=float, default=DEFAULT_TIMEOUT,
-                        help='seconds to wait for the service and its answer '
-                             '(default: %(default)s)')
-    options = parser.parse_args(argv)
+
+
+def parse_arguments(argv):
+    """Read the command line (ROS arguments already removed)."""
+    options = parse_client_arguments(
+        argv, 'spawn_model_client', 'Spawn a URDF model through /mujoco/spawn_urdf_model '
+        '(by default R2-D2 where the lesson puts it).', add_spawn_arguments)
     if options.yaw is None and options.quaternion is None:
         options.quaternion = LESSON_QUATERNION
     if not os.path.isfile(options.file):
@@ -57,12 +53,9 @@ def parse_arguments(argv):
 
 def main(args=None):
     """Spawn one model, print the response, exit with status 0 if the world spawned it."""
-    options = parse_arguments(remove_ros_args(sys.argv if args is None else args)[1:])
-    rclpy.init(args=args)
-    node = None
-    status = 1
-    try:
-        node = Node('spawn_model_client')
+    options = parse_arguments(program_arguments(args))
+
+    def spawn(node):
         pose = make_pose(options.x, options.y, options.z,
                          yaw=options.yaw, quaternion=options.quaternion)
         response = spawn_model(
@@ -70,16 +63,9 @@ def main(args=None):
             namespace=options.namespace, reference_frame=options.reference_frame,
             timeout=options.timeout)
         print(response_text(response))
-        status = 0 if response.success else 1
-    except (OSError, TimeoutError) as error:
-        print(f'spawn_model_client: {error}', file=sys.stderr)
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    finally:
-        if node is not None:
-            node.destroy_node()
-        rclpy.try_shutdown()
-    return status
+        return 0 if response.success else 1
+    return run_node(lambda: Node('spawn_model_client'), spawn, args=args,
+                    program='spawn_model_client', errors=(OSError, TimeoutError))
 
 
 if __name__ == '__main__':

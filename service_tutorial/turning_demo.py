@@ -27,8 +27,9 @@ from rclpy.action import ActionClient
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.signals import SignalHandlerOptions
-from rclpy.utilities import remove_ros_args
 from service_tutorial import model_services
+from service_tutorial.client_main import program_arguments
+from service_tutorial.conversions import make_pose, seconds_of, yaw_of
 from service_tutorial.model_services import response_text
 from service_tutorial.recording import TurnRecorder
 from service_tutorial.robot_turning_action_client import STATUS_NAMES
@@ -160,7 +161,7 @@ def spawn_r2d2(node):
     """Spawn R2-D2 the lesson's way and show where it landed."""
     response = model_services.spawn_model(
         node, 'r2d2', model_file=model_services.model_path('r2d2.urdf'),
-        pose=model_services.make_pose(-2.0, 1.0, 1.0, quaternion=(0.0, 0.0, -0.707, 0.707)),
+        pose=make_pose(-2.0, 1.0, 1.0, quaternion=(0.0, 0.0, -0.707, 0.707)),
         reference_frame='world')
     say(indent(response_text(response)))
     if not response.success:
@@ -168,7 +169,7 @@ def spawn_r2d2(node):
     state = model_services.get_model_state(node, 'r2d2')
     position = state.pose.position
     say(indent(f'r2d2 is at x {position.x:.2f} m, y {position.y:.2f} m, z {position.z:.2f} m, '
-               f'heading {math.degrees(model_services.yaw_of(state.pose)):.1f} deg'))
+               f'heading {math.degrees(yaw_of(state.pose.orientation)):.1f} deg'))
 
 
 class HeadingFollower:
@@ -308,9 +309,8 @@ def reset(node):
     """Reset the simulation and show tinybot back at its start heading."""
     model_services.reset_simulation(node)
     state = model_services.get_model_state(node, ROBOT)
-    stamp = state.header.stamp
-    say(indent(f'simulation time {stamp.sec + stamp.nanosec * 1e-9:.2f} s, '
-               f'tinybot heading {model_services.yaw_of(state.pose):.3f} rad'))
+    say(indent(f'simulation time {seconds_of(state.header.stamp):.2f} s, '
+               f'tinybot heading {yaw_of(state.pose.orientation):.3f} rad'))
 
 
 def lesson_steps(options):
@@ -377,7 +377,7 @@ def parse_arguments(argv):
 
 def main(args=None):
     """Run the demo; exit status 0 if every step succeeded."""
-    options = parse_arguments(remove_ros_args(sys.argv if args is None else args)[1:])
+    options = parse_arguments(program_arguments(args))
     log_dir = options.log_dir or tempfile.mkdtemp(prefix='turning_demo-')
     os.makedirs(log_dir, exist_ok=True)
     # Ctrl-C and SIGTERM raise KeyboardInterrupt here, so the children are always stopped.

@@ -11,7 +11,7 @@ import threading
 import time
 
 import pytest
-from service_tutorial.ros_isolation import isolate_ros_graph
+from ros_isolation import isolate_ros_graph
 
 # Before rclpy (and any node a test starts) reads the environment.
 isolate_ros_graph()

@@ -25,6 +25,9 @@ EXPECTED_ROWS = {
     'startup': 1,
     'turning': len(QUICK.durations) * len(QUICK.velocities),
     'targets': 1 + 2 * len(QUICK.robot_counts) + 1 + 1,
+    'core': 2,
+    'camera': 1,
+    'answers': 3,
 }
 
 

@@ -2,14 +2,14 @@
 
 import math
 import os
-import struct
-import time
-import zlib
 
+import numpy as np
+from PIL import Image as PillowImage
 import pytest
 from rclpy.parameter import Parameter
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import CameraInfo, Image
+from service_tutorial.conversions import seconds_of as seconds
 from service_tutorial.mujoco_world import MujocoWorld
 from std_srvs.srv import Trigger
 
@@ -29,31 +29,23 @@ def start_world(ros, **parameters):
     return node
 
 
-def seconds(stamp):
-    """Convert a builtin_interfaces/Time to seconds."""
-    return stamp.sec + stamp.nanosec * 1e-9
+def wait_sim(ros, world, duration):
+    """Wait until the world's simulation time has gone on by duration seconds."""
+    end = world.world.time + duration
+    assert ros.wait_for(lambda: world.world.time >= end, timeout=30.0 + 10.0 * duration), \
+        f'the world did not reach {end:.2f} s of simulation time'
 
 
 def png_size(path):
-    """Check a PNG's structure and CRCs; return its (width, height)."""
-    with open(path, 'rb') as png_file:
-        content = png_file.read()
-    assert content[:8] == b'\x89PNG\r\n\x1a\n'
-    position, kinds, data = 8, [], b''
-    while position < len(content):
-        length, kind = struct.unpack('>I4s', content[position:position + 8])
-        payload = content[position + 8:position + 8 + length]
-        assert struct.unpack('>I', content[position + 8 + length:position + 12 + length])[0] \
-            == zlib.crc32(kind + payload)
-        kinds.append(kind)
-        data += payload if kind == b'IDAT' else b''
-        if kind == b'IHDR':
-            width, height, depth, colour_type = struct.unpack('>IIBB', payload[:10])
-        position += 12 + length
-    assert kinds[0] == b'IHDR' and kinds[-1] == b'IEND'
-    assert (depth, colour_type) == (8, 2), 'an 8-bit RGB PNG is expected'
-    assert len(zlib.decompress(data)) == height * (1 + 3 * width)
-    return width, height
+    """Check a PNG's structure and CRCs with Pillow, decode it; return its (width, height)."""
+    with PillowImage.open(path) as png:
+        assert png.format == 'PNG'
+        png.verify()  # the CRC of every chunk
+    with PillowImage.open(path) as png:
+        assert png.mode == 'RGB', 'an 8-bit RGB PNG is expected'
+        pixels = np.asarray(png)
+    assert pixels.shape == (png.height, png.width, 3) and pixels.std() > 0, 'a blank picture'
+    return png.width, png.height
 
 
 def test_frames_arrive_at_the_camera_rate(ros):
@@ -62,15 +54,13 @@ def test_frames_arrive_at_the_camera_rate(ros):
     images = ros.subscribe(Image, IMAGE_TOPIC)
     infos = ros.subscribe(CameraInfo, INFO_TOPIC)
     assert ros.wait_for(lambda: images, timeout=10.0), 'no camera image within 10 s'
-    first, sim_start, wall_start = len(images), world.world.time, time.monotonic()
-    time.sleep(2.0)
+    first, sim_start = len(images), world.world.time
+    wait_sim(ros, world, 2.0)
     count, sim_time = len(images) - first, world.world.time - sim_start
-    wall_time = time.monotonic() - wall_start
-    # The rate is in Hz of simulation time. A software renderer (no GPU) can slow the world
-    # below real time, so frames per wall second are checked against the pace it kept.
+    # The rate is in Hz of simulation time, whatever pace a software renderer (no GPU) lets
+    # the world keep; how fast it keeps it is the benchmark's business (its camera table).
     assert count == pytest.approx(5.0 * sim_time, abs=1.5), \
         f'{count} frames in {sim_time:.2f} s of simulation time, 5 per second expected'
-    assert sim_time / wall_time > 0.3, 'the camera slowed the world down to a crawl'
     # Stamps are simulation time, one period apart.
     stamps = [seconds(msg.header.stamp) for msg in images]
     assert all(abs(b - a - 0.2) < 0.003 for a, b in zip(stamps, stamps[1:])), stamps
@@ -96,7 +86,10 @@ def test_frames_arrive_at_the_camera_rate(ros):
 def test_disabled_camera_has_no_topic_and_renders_nothing(ros):
     world = start_world(ros)
     images = ros.subscribe(Image, IMAGE_TOPIC)
-    time.sleep(0.5)
+    # The world sees the subscriber, and half a second of simulation time goes by: five frames
+    # at the default rate, had the camera been enabled.
+    assert ros.wait_for(lambda: world.count_subscribers(IMAGE_TOPIC) == 1, timeout=5.0)
+    wait_sim(ros, world, 0.5)
     assert world.count_publishers(IMAGE_TOPIC) == 0
     assert world.count_publishers(INFO_TOPIC) == 0
     assert images == []
@@ -107,7 +100,7 @@ def test_enabled_camera_renders_only_for_a_subscriber(ros):
     world = start_world(ros, camera_enabled=True, camera_rate=20.0, camera_width=WIDTH,
                         camera_height=HEIGHT)
     assert ros.wait_for(lambda: world.count_publishers(IMAGE_TOPIC) == 1, timeout=5.0)
-    time.sleep(0.5)
+    wait_sim(ros, world, 0.5)  # ten frames, had anyone listened
     assert world.camera_stream.camera._renderer is None, 'rendered with nobody listening'
     assert world.camera_stream.next_due == math.inf, 'stepping still stops for the camera'
     # A subscriber comes and goes: frames flow, then the camera goes quiet again.

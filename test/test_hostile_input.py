@@ -15,7 +15,6 @@ import struct
 import subprocess
 import sys
 import threading
-import time
 
 from ament_index_python.packages import get_package_share_directory
 from geometry_msgs.msg import Pose, Twist
@@ -23,9 +22,10 @@ from nav_msgs.msg import Odometry
 import pytest
 from rclpy.parameter import Parameter
 from rosgraph_msgs.msg import Clock
+from service_tutorial.conversions import fill_pose_msg, fill_twist_msg, seconds_of, yaw_of
 from service_tutorial.mujoco_world import MujocoWorld
 from service_tutorial.robot_turning_server import RobotTurningServer
-from service_tutorial.world import MAX_WHEEL_RIM_SPEED
+from service_tutorial.sim.plugins.diff_drive import MAX_WHEEL_RIM_SPEED
 from srv_interfaces.srv import ControlTurningMessage, DeleteModel, GetModelList, GetModelState
 from srv_interfaces.srv import SetModelState, SpawnModel
 from std_srvs.srv import Empty
@@ -65,18 +65,11 @@ def mesh_robot(filename):
 
 
 def pose(x=0.0, y=0.0, z=0.5, w=1.0, qx=0.0, qy=0.0, qz=0.0):
-    msg = Pose()
-    msg.position.x, msg.position.y, msg.position.z = float(x), float(y), float(z)
-    q = msg.orientation
-    q.w, q.x, q.y, q.z = float(w), float(qx), float(qy), float(qz)
-    return msg
+    return fill_pose_msg(Pose(), (x, y, z), (w, qx, qy, qz))
 
 
 def twist(linear=(0.0, 0.0, 0.0), angular=(0.0, 0.0, 0.0)):
-    msg = Twist()
-    msg.linear.x, msg.linear.y, msg.linear.z = (float(v) for v in linear)
-    msg.angular.x, msg.angular.y, msg.angular.z = (float(v) for v in angular)
-    return msg
+    return fill_twist_msg(Twist(), linear, angular)
 
 
 def finite(*values):
@@ -246,8 +239,7 @@ class WorldCalls:
         assert ros.wait_for(lambda: self.clock, timeout=10.0), 'no /clock from the world'
 
     def now(self):
-        stamp = self.clock[-1].clock
-        return stamp.sec + stamp.nanosec * 1e-9
+        return seconds_of(self.clock[-1].clock)
 
     def wait_sim(self, duration):
         end = self.now() + duration
@@ -502,7 +494,7 @@ def test_absurd_cmd_vel_never_puts_nan_in_the_physics_or_odom(ros, capfd):
         while world.now() < end:
             for publisher in publishers.values():
                 publisher.publish(command)
-            time.sleep(0.005)
+            world.wait_sim(0.005)
         for name in fastest:
             state = world.state(name)
             assert state.success, state.status_message
@@ -611,39 +603,35 @@ def turning(rclpy_session):
     ros.shutdown()
 
 
-def turn(turning, time_duration, angular_vel):
-    """Call /control_robot_angle; return its answer and how long it took in wall time."""
+def turn(turning, time_duration, angular_vel, *, timeout=30.0):
+    """Call /control_robot_angle; return whether it succeeded, failing if it is silent."""
     world, client = turning
-    start = time.monotonic()
     future = client.call_async(ControlTurningMessage.Request(
         time_duration=time_duration, angular_vel=angular_vel))
-    assert world.ros.wait_for(future.done, timeout=30.0), '/control_robot_angle is silent'
-    return future.result().success, time.monotonic() - start
+    assert world.ros.wait_for(future.done, timeout=timeout), \
+        f'/control_robot_angle did not answer within {timeout} s'
+    return future.result().success
 
 
 class TestTurningService:
-    """The lesson's turning service answers every request, and at once when it refuses."""
+    """The lesson's turning service answers every request, and refuses the bad ones."""
 
     @pytest.mark.parametrize('time_duration, angular_vel', [
         (1, math.nan), (1, math.inf), (1, -math.inf), (1, 1.6), (1, -10.0), (1, 1e308),
         (4294967295, 0.5), (61, 0.5)])
-    def test_bad_request_is_refused_at_once(self, turning, time_duration, angular_vel):
-        succeeded, took = turn(turning, time_duration, angular_vel)
-        assert not succeeded
-        assert took < 2.0
+    def test_bad_request_is_refused(self, turning, time_duration, angular_vel):
+        # How soon a refusal comes is the benchmark's business (its answers table).
+        assert not turn(turning, time_duration, angular_vel)
         assert turning[0].models() == ['tinybot']
 
     def test_zero_and_negative_turns_are_carried_out(self, turning):
         world = turning[0]
-        succeeded, took = turn(turning, 0, 1.0)
-        assert succeeded and took < 2.0
+        assert turn(turning, 0, 1.0)
         start = world.state('tinybot').pose.orientation
-        succeeded, _ = turn(turning, 1, -0.5)
-        assert succeeded
+        assert turn(turning, 1, -0.5)
         world.wait_sim(0.5)
         end = world.state('tinybot').pose.orientation
-        yaw = [math.atan2(2 * (q.w * q.z + q.x * q.y), 1 - 2 * (q.y * q.y + q.z * q.z))
-               for q in (start, end)]
+        yaw = [yaw_of(q) for q in (start, end)]
         assert yaw[1] - yaw[0] == pytest.approx(-0.5, abs=0.05)
 
 

@@ -6,8 +6,8 @@ import os
 
 import numpy as np
 import pytest
-from service_tutorial.urdf_loader import load_urdf
-from service_tutorial.world import World
+from service_tutorial.sim.urdf.builder import load_urdf
+from service_tutorial.sim.world import World
 
 MODELS = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), 'models')
 MODEL_FILES = sorted(glob.glob(os.path.join(MODELS, '*.urdf')))

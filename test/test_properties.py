@@ -13,9 +13,9 @@ from hypothesis import given
 from hypothesis import HealthCheck, settings
 from hypothesis import strategies as st
 import numpy as np
-from service_tutorial.world import MAX_WHEEL_RIM_SPEED
-from service_tutorial.world import World
-from service_tutorial.world import WorldError
+from service_tutorial.sim.plugins.diff_drive import MAX_WHEEL_RIM_SPEED
+from service_tutorial.sim.validation import WorldError
+from service_tutorial.sim.world import World
 
 TINYBOT = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), 'models',
                        'tinybot.urdf')

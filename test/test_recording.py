@@ -4,22 +4,18 @@ import math
 import os
 from xml.etree import ElementTree
 
-from builtin_interfaces.msg import Time
 from nav_msgs.msg import Odometry
 import numpy as np
+from PIL import Image as PillowImage, ImageSequence
 import pytest
 from rclpy.node import Node
 from sensor_msgs.msg import Image
+from service_tutorial.conversions import time_msg as stamp
 from service_tutorial.recording import image_pixels, TurnRecorder
 
 pytestmark = pytest.mark.ros
 
 WIDTH, HEIGHT = 40, 30
-
-
-def stamp(seconds):
-    """Make a builtin_interfaces/Time."""
-    return Time(sec=int(seconds), nanosec=int(round((seconds - int(seconds)) * 1e9)))
 
 
 def camera_image(seconds, encoding='rgb8', padding=0):
@@ -110,6 +106,11 @@ def test_save_writes_the_animation_and_the_plot(node, tmp_path):
     assert [os.path.basename(path) for path in paths] == ['turning.gif', 'trajectory.svg']
     with open(paths[0], 'rb') as gif_file:
         assert gif_file.read(6) == b'GIF89a'
+    with PillowImage.open(paths[0]) as gif:
+        shown = [np.asarray(frame.convert('RGB')) for frame in ImageSequence.Iterator(gif)]
+    # Every frame kept, each one the picture it was: red counts tenths of a second.
+    assert [int(frame[0, 0, 0]) for frame in shown] == list(range(21))
+    assert all((frame[..., 2] == 77).all() for frame in shown)
     root = ElementTree.parse(paths[1]).getroot()
     line = root.find('.//{http://www.w3.org/2000/svg}polyline[@id="heading"]')
     assert len(line.get('points').split()) == 101

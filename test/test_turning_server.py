@@ -6,7 +6,8 @@ from geometry_msgs.msg import Twist
 import pytest
 from rcl_interfaces.srv import GetParameters
 from rclpy.parameter import Parameter
-from service_tutorial.model_services import call, yaw_of
+from service_tutorial.conversions import yaw_of
+from service_tutorial.model_services import call
 from service_tutorial.mujoco_world import MujocoWorld
 from service_tutorial.robot_turning_server import RobotTurningServer
 from srv_interfaces.srv import ControlTurningMessage, GetModelState
@@ -34,7 +35,7 @@ class TurningWorld:
 
     def heading(self):
         """Tinybot's heading in the world, from /mujoco/get_model_state."""
-        return yaw_of(self.state().pose)
+        return yaw_of(self.state().pose.orientation)
 
     def state(self):
         request = GetModelState.Request(model_name='tinybot', reference_frame='world')

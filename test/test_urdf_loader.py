@@ -6,13 +6,15 @@ import os
 import mujoco
 import numpy as np
 import pytest
-from service_tutorial import urdf_loader
-from service_tutorial.diff_drive import ODOMETRY_SOURCE_ENCODER
-from service_tutorial.diff_drive import ODOMETRY_SOURCE_WORLD
-from service_tutorial.urdf_loader import load_urdf
-from service_tutorial.urdf_loader import UrdfError
-from service_tutorial.world import World
-from service_tutorial.world import WorldError
+from service_tutorial.sim.plugins import diff_drive
+from service_tutorial.sim.plugins.diff_drive import ODOMETRY_SOURCE_ENCODER
+from service_tutorial.sim.plugins.diff_drive import ODOMETRY_SOURCE_WORLD
+from service_tutorial.sim.urdf import builder
+from service_tutorial.sim.urdf import hardened_xml
+from service_tutorial.sim.urdf.builder import load_urdf
+from service_tutorial.sim.urdf.hardened_xml import UrdfError
+from service_tutorial.sim.validation import WorldError
+from service_tutorial.sim.world import World
 
 INERTIAL = ('<inertial><mass value="{mass}"/><inertia ixx="0.01" iyy="0.01" izz="0.01" '
             'ixy="0" ixz="0" iyz="0"/></inertial>')
@@ -64,32 +66,32 @@ GEOMETRY_ROBOT = robot(
 
 def test_geometry_types_sizes_and_groups():
     model = compiled(load_urdf(GEOMETRY_ROBOT))
-    box, sphere = body_geoms(model, 'base', urdf_loader.VISUAL_GROUP)
+    box, sphere = body_geoms(model, 'base', builder.VISUAL_GROUP)
     assert model.geom_type[box] == mujoco.mjtGeom.mjGEOM_BOX
     np.testing.assert_allclose(model.geom_size[box], [0.2, 0.1, 0.05])
     assert model.geom_type[sphere] == mujoco.mjtGeom.mjGEOM_SPHERE
     assert model.geom_size[sphere][0] == pytest.approx(0.05)
     np.testing.assert_allclose(model.geom_pos[sphere], [0.0, 0.0, 0.1])
-    (cylinder,) = body_geoms(model, 'wheel', urdf_loader.COLLISION_GROUP)
+    (cylinder,) = body_geoms(model, 'wheel', builder.COLLISION_GROUP)
     assert model.geom_type[cylinder] == mujoco.mjtGeom.mjGEOM_CYLINDER
     np.testing.assert_allclose(model.geom_size[cylinder][:2], [0.1, 0.02])
 
 
 def test_visuals_do_not_collide_and_collisions_do():
     model = compiled(load_urdf(GEOMETRY_ROBOT))
-    for index in body_geoms(model, 'base', urdf_loader.VISUAL_GROUP):
+    for index in body_geoms(model, 'base', builder.VISUAL_GROUP):
         assert model.geom_contype[index] == 0 and model.geom_conaffinity[index] == 0
-    for index in body_geoms(model, 'base', urdf_loader.COLLISION_GROUP):
+    for index in body_geoms(model, 'base', builder.COLLISION_GROUP):
         assert model.geom_contype[index] == 1 and model.geom_conaffinity[index] == 1
 
 
 def test_visual_colours_named_inline_and_default():
     model = compiled(load_urdf(GEOMETRY_ROBOT))
-    box, sphere = body_geoms(model, 'base', urdf_loader.VISUAL_GROUP)
+    box, sphere = body_geoms(model, 'base', builder.VISUAL_GROUP)
     np.testing.assert_allclose(model.geom_rgba[box], [0.0, 0.5, 0.5, 1.0])
     np.testing.assert_allclose(model.geom_rgba[sphere], [1.0, 0.0, 0.0, 1.0])
-    (disc,) = body_geoms(model, 'wheel', urdf_loader.VISUAL_GROUP)
-    np.testing.assert_allclose(model.geom_rgba[disc], urdf_loader.DEFAULT_VISUAL_RGBA)
+    (disc,) = body_geoms(model, 'wheel', builder.VISUAL_GROUP)
+    np.testing.assert_allclose(model.geom_rgba[disc], builder.DEFAULT_VISUAL_RGBA)
 
 
 def test_joints_types_limits_axes_and_dynamics():
@@ -202,10 +204,11 @@ def test_ros2_diff_drive_plugin():
     assert drive.max_wheel_torque == 2.0 and drive.max_wheel_acceleration == 0.5
     assert (drive.odometry_frame, drive.robot_base_frame) == ('odom_a', 'chassis')
     assert drive.odometry_source == ODOMETRY_SOURCE_ENCODER
-    assert drive.ros_namespace == '/bot' and drive.ros_remappings == ('cmd_vel:=cmd',)
+    (setup,) = description.plugins
+    assert setup.block.ros_namespace == '/bot' and setup.block.ros_remappings == ('cmd_vel:=cmd',)
     model = compiled(description)
     for name in ('left', 'right'):
-        actuator = model.actuator(urdf_loader.drive_actuator_name(name))
+        actuator = model.actuator(diff_drive.drive_actuator_name(name))
         assert model.actuator_trnid[actuator.id][0] == model.joint(name).id
         np.testing.assert_allclose(model.actuator_forcerange[actuator.id], [-2.0, 2.0])
         assert model.actuator_dyntype[actuator.id] == mujoco.mjtDyn.mjDYN_INTEGRATOR
@@ -213,7 +216,8 @@ def test_ros2_diff_drive_plugin():
 
 @pytest.mark.parametrize('legacy, swapped', [('false', False), ('true', True)])
 def test_ros1_diff_drive_plugin(legacy, swapped):
-    drive = load_urdf(wheeled_robot(ROS1_DIFF_DRIVE.format(legacy=legacy))).diff_drive
+    description = load_urdf(wheeled_robot(ROS1_DIFF_DRIVE.format(legacy=legacy)))
+    drive = description.diff_drive
     # gazebo_ros in ROS 1 drove each wheel with the other side's speed in legacy mode.
     expected = (('right',), ('left',)) if swapped else (('left',), ('right',))
     assert (drive.left_joints, drive.right_joints) == expected
@@ -222,7 +226,7 @@ def test_ros1_diff_drive_plugin(legacy, swapped):
     assert drive.max_wheel_torque == 3.0 and drive.max_wheel_acceleration == 1.5
     assert (drive.odometry_frame, drive.robot_base_frame) == ('odom_b', 'base_b')
     assert drive.odometry_source == ODOMETRY_SOURCE_WORLD
-    assert drive.command_topic == 'base/cmd_vel'
+    assert diff_drive.parameter(description.plugins[0].block, 'command_topic') == 'base/cmd_vel'
 
 
 def test_diff_drive_defaults_follow_gazebo_ros():
@@ -246,8 +250,8 @@ def test_gazebo_friction_blocks():
                 '<gazebo reference="tyre"><mu1>0.8</mu1><mu2>0.6</mu2></gazebo>'
                 '<gazebo reference="caster"><mu1>0</mu1><mu2>0</mu2></gazebo>')
     model = compiled(load_urdf(xml))
-    (grippy,) = body_geoms(model, 'tyre', urdf_loader.COLLISION_GROUP)
-    (slippery,) = body_geoms(model, 'caster', urdf_loader.COLLISION_GROUP)
+    (grippy,) = body_geoms(model, 'tyre', builder.COLLISION_GROUP)
+    (slippery,) = body_geoms(model, 'caster', builder.COLLISION_GROUP)
     assert model.geom_friction[grippy][0] == pytest.approx(0.6)
     assert model.geom_priority[grippy] == 1 and model.geom_condim[grippy] == 3
     assert model.geom_friction[slippery][0] == 0.0
@@ -272,7 +276,7 @@ def test_relative_mesh_under_base_dir(tmp_path):
     model = compiled(description)
     assert model.nmesh == 1
     assert description.mesh_files == (str(tmp_path / 'meshes' / 'tetra.obj'),)
-    (geom,) = body_geoms(model, 'base', urdf_loader.VISUAL_GROUP)
+    (geom,) = body_geoms(model, 'base', builder.VISUAL_GROUP)
     assert model.geom_type[geom] == mujoco.mjtGeom.mjGEOM_MESH
 
 
@@ -345,7 +349,7 @@ def test_entity_expansion_bomb_is_refused():
 
 
 def test_oversized_model_xml_is_refused_before_parsing():
-    padding = '<!--' + 'x' * urdf_loader.MAX_MODEL_XML_BYTES + '-->'
+    padding = '<!--' + 'x' * hardened_xml.MAX_MODEL_XML_BYTES + '-->'
     with pytest.raises(UrdfError, match='more than the limit'):
         load_urdf(robot(link('a'), padding))
 

@@ -3,14 +3,13 @@
 import logging
 import math
 import os
-import time
 
 import mujoco
 import numpy as np
 import pytest
-from service_tutorial.world import MAX_WHEEL_RIM_SPEED
-from service_tutorial.world import World
-from service_tutorial.world import WorldError
+from service_tutorial.sim.plugins.diff_drive import MAX_WHEEL_RIM_SPEED
+from service_tutorial.sim.validation import WorldError
+from service_tutorial.sim.world import World
 
 MODELS = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), 'models')
 TINYBOT = os.path.join(MODELS, 'tinybot.urdf')
@@ -105,19 +104,17 @@ def test_bad_poses_are_refused(world):
             ({'position': (0.0, math.inf, 0.0)}, 'position contains NaN or infinity'),
             ({'orientation': (0.0, 0.0, 0.0, 0.0)}, 'orientation quaternion is zero'),
             ({'orientation': (math.nan, 0.0, 0.0, 1.0)}, 'orientation contains NaN'),
-            ({'reference_frame': 'foo'}, "unknown reference frame 'foo'"),
-            ({'namespace': 'bad name'}, 'not a valid ROS namespace')]:
+            ({'reference_frame': 'foo'}, "unknown reference frame 'foo'")]:
         with pytest.raises(WorldError, match=message):
             world.spawn_urdf_file('r2d2', R2D2, **kwargs)
     assert world.model_names() == []
 
 
-def test_model_listing_namespace_and_delete(world):
-    world.spawn_urdf_file('tinybot', TINYBOT, namespace='robots/tiny/')
+def test_model_listing_and_delete(world):
+    world.spawn_urdf_file('tinybot', TINYBOT)
     world.spawn_urdf_file('r2d2', R2D2, position=(2.0, 0.0, 0.0))
     assert world.model_names() == ['tinybot', 'r2d2']
     assert world.has_model('r2d2') and not world.has_model('c3po')
-    assert world.namespace('tinybot') == '/robots/tiny' and world.namespace('r2d2') == ''
     assert world.diff_drive_models() == ['tinybot']
     world.delete_model('r2d2')
     assert world.model_names() == ['tinybot']
@@ -434,29 +431,26 @@ def test_step_count_and_world_settings():
         World(timestep=0.0)
 
 
-def test_spawning_takes_milliseconds_and_stepping_costs_what_mujoco_costs(tinybot_world):
+def test_spawned_models_step_exactly_as_bare_mujoco_steps(tinybot_world):
+    # How long spawning and stepping take is the benchmark's business (its core table).
     world = tinybot_world
-    durations = []
     for index in range(5):
-        start = time.perf_counter()
         world.spawn_urdf_file(f'r2d2_{index}', R2D2, position=(2.0 + index, 0.0, 0.0))
-        durations.append(time.perf_counter() - start)
-    assert sorted(durations)[2] < 0.05
+    assert world.model_names() == ['tinybot'] + [f'r2d2_{index}' for index in range(5)]
 
     model, data = world.model, world.data
+    kind = mujoco.mjtState.mjSTATE_INTEGRATION
     raw = mujoco.MjData(model)
-    state = np.empty(mujoco.mj_stateSize(model, mujoco.mjtState.mjSTATE_INTEGRATION))
-    mujoco.mj_getState(model, data, state, mujoco.mjtState.mjSTATE_INTEGRATION)
-    mujoco.mj_setState(model, raw, state, mujoco.mjtState.mjSTATE_INTEGRATION)
-    world_best = raw_best = math.inf
-    for _ in range(5):
-        start = time.perf_counter()
-        world.step(1000)
-        world_best = min(world_best, time.perf_counter() - start)
-        start = time.perf_counter()
+    state = np.empty(mujoco.mj_stateSize(model, kind))
+    mujoco.mj_getState(model, data, state, kind)
+    mujoco.mj_setState(model, raw, state, kind)
+    raw_state = np.empty_like(state)
+    for _ in range(3):
+        assert world.step(1000) == 1000
         mujoco.mj_step(model, raw, 1000)
-        raw_best = min(raw_best, time.perf_counter() - start)
-    assert world_best < 1.5 * raw_best
+        mujoco.mj_getState(model, data, state, kind)
+        mujoco.mj_getState(model, raw, raw_state, kind)
+        np.testing.assert_array_equal(state, raw_state)
 
 
 def block_robot(mass, size):
@@ -554,16 +548,6 @@ def test_pose_limits_and_extreme_quaternions(world):
     world.set_model_state('r2d2', position=(0.0, 0.0, 0.0), orientation=(0.0, 0.0, 0.0, 1e-300))
     np.testing.assert_allclose(world.get_model_state('r2d2').orientation, [0, 0, 0, 1],
                                atol=1e-12)
-
-
-def test_namespaces_ros_would_refuse_are_refused(world):
-    for namespace, message in [('robôt', "its part 'robôt' must start with a letter"),
-                               ('a/2b', "its part '2b' must start with a letter"),
-                               ('n' * 201, 'longer than 200 characters')]:
-        with pytest.raises(WorldError, match=message):
-            world.spawn_urdf_file('tinybot', TINYBOT, namespace=namespace)
-    world.spawn_urdf_file('tinybot', TINYBOT, namespace='/_robots/tiny_1/')
-    assert world.namespace('tinybot') == '/_robots/tiny_1'
 
 
 def pile(count):

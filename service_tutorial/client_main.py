@@ -1,0 +1,66 @@
+"""
+The main() of every executable here: rclpy up, one node, its work, and a clean shutdown.
+
+rclpy.init() comes first, then the node is made and does its work; Ctrl-C (KeyboardInterrupt)
+and a shutdown from outside (ExternalShutdownException) end it quietly, and in every case the
+node is destroyed and rclpy shut down. Errors the program expects are printed as
+'<program>: <error>' on stderr and give exit status 1.
+"""
+
+import argparse
+import sys
+
+import rclpy
+from rclpy.executors import ExternalShutdownException
+from rclpy.utilities import remove_ros_args
+from service_tutorial.model_services import DEFAULT_TIMEOUT
+
+
+def program_arguments(args=None):
+    """Return the program's own arguments: args or sys.argv without its name and ROS part."""
+    return remove_ros_args(sys.argv if args is None else args)[1:]
+
+
+def parse_client_arguments(argv, prog, description, add_arguments=None):
+    """Parse a world service client's command line: its own arguments, then --timeout."""
+    parser = argparse.ArgumentParser(prog=prog, description=description)
+    if add_arguments is not None:
+        add_arguments(parser)
+    parser.add_argument('--timeout', type=float, default=DEFAULT_TIMEOUT,
+                        help='seconds to wait for the service and its answer '
+                             '(default: %(default)s)')
+    return parser.parse_args(argv)
+
+
+def run_node(make_node, work, *, args=None, program='', errors=(), interrupted_status=1):
+    """
+    Make a node, return work(node) as the exit status; stop cleanly whatever happens.
+
+    errors: exception classes that are reported on stderr (status 1) rather than raised.
+    interrupted_status: the status after Ctrl-C or an external shutdown.
+    """
+    rclpy.init(args=args)
+    node = None
+    try:
+        node = make_node()
+        return work(node)
+    except errors as error:
+        print(f'{program}: {error}', file=sys.stderr)
+        return 1
+    except (KeyboardInterrupt, ExternalShutdownException):
+        return interrupted_status
+    except Exception:
+        # Ctrl-C shuts the context down under a running callback, which then fails: that is
+        # the program stopping, not an error of its own.
+        if rclpy.ok():
+            raise
+        return interrupted_status
+    finally:
+        if node is not None:
+            node.destroy_node()
+        rclpy.try_shutdown()
+
+
+def spin_node(make_node, *, args=None):
+    """Make a node and spin it until Ctrl-C or shutdown; the main() of a server."""
+    return run_node(make_node, rclpy.spin, args=args, interrupted_status=None)

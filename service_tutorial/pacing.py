@@ -1,0 +1,169 @@
+"""
+When the world node steps the physics and publishes its streams: the pacing scheduler.
+
+No ROS and no world here: the node hands in simulation time, and the wall and CPU clocks are
+parameters, so the tests drive a Pacer with fake clocks.
+
+Streams (/clock, odometry, joint states) fall due at their rates in simulation time, with half
+a step of slack, since simulation time is a sum of steps and carries rounding errors. In real
+time (real_time_factor above 0) a tick steps as far as the wall clock says, in chunks that end
+where a stream falls due. Free-running (real_time_factor 0) a tick steps for a budget of wall
+time, and each stream is also held to its rate in wall time: far faster than real time, the
+simulated rates would cost more than the physics.
+
+The executor's turn between two ticks costs CPU time that grows with the node's topics (about
+1.8 ms with 50 robots), so ticks are spaced to keep it a small share of the time. Free-running,
+a tick steps EXECUTOR_SHARE times as long as a turn (STEP_BUDGET to MAX_STEP_BUDGET); in real
+time, ticks come every REAL_TIME_SHARE turns (REAL_TIME_PERIOD to MAX_REAL_TIME_PERIOD); paused,
+there is nothing to step and ticks come every PAUSED_TICK_PERIOD.
+"""
+
+import math
+import time
+
+STEP_BUDGET = 0.005
+EXECUTOR_SHARE = 20.0
+MAX_STEP_BUDGET = 0.05
+REAL_TIME_SHARE = 5.0
+REAL_TIME_PERIOD = 0.002
+MAX_REAL_TIME_PERIOD = 0.02
+PAUSED_TICK_PERIOD = 0.02
+# Further behind real time than this (s), the machine cannot keep up: do not try to catch up.
+MAX_LAG = 0.1
+NANOSECONDS = 1_000_000_000
+
+
+class Pacer:
+    """Decides how far each tick steps, how often ticks come, and which streams are due."""
+
+    def __init__(self, *, timestep, real_time_factor, periods, wall_clock=time.monotonic,
+                 cpu_clock=time.thread_time):
+        """Pace a world of this timestep; periods maps each stream's name to its period (s)."""
+        self.timestep = timestep
+        self.real_time_factor = max(0.0, real_time_factor)
+        self.free_running = self.real_time_factor == 0.0
+        self._periods = dict(periods)
+        self._next_sim = dict.fromkeys(self._periods, 0.0)
+        self._next_wall = dict.fromkeys(self._periods, 0.0)
+        self._wall_clock = wall_clock
+        self._cpu_clock = cpu_clock
+        self.step_wall_time = 1e-5  # running estimate of one physics step, in wall seconds
+        self.executor_turn = 0.0  # running estimate of the CPU time between two ticks
+        self._tick_end_cpu = None
+        self._wall_anchor = wall_clock()
+        self._sim_anchor = 0.0
+
+    # --- ticks --------------------------------------------------------------------------------
+
+    @property
+    def first_tick_period(self):
+        """Return the step timer's period to start with, in s (0: every executor turn)."""
+        return 0.0 if self.free_running else REAL_TIME_PERIOD
+
+    def anchor(self, sim_time):
+        """Tie simulation time to the wall clock from now on (start, pause, reset)."""
+        self._wall_anchor = self._wall_clock()
+        self._sim_anchor = sim_time
+
+    def start_tick(self):
+        """Note the CPU time the executor spent since the last tick ended."""
+        now = self._cpu_clock()
+        if self._tick_end_cpu is not None:
+            # Follows the cheapest recent turns: a slow service call is not overhead.
+            self.executor_turn = max(0.0, min(now - self._tick_end_cpu,
+                                              1.05 * self.executor_turn + 1e-6))
+
+    def end_tick(self):
+        """Note when a tick ended, in CPU time."""
+        self._tick_end_cpu = self._cpu_clock()
+
+    def tick_period_ns(self, paused):
+        """Return the step timer's period for the current state, in whole milliseconds."""
+        if paused:
+            return round(PAUSED_TICK_PERIOD * NANOSECONDS)
+        if self.free_running:
+            return 0
+        period = min(MAX_REAL_TIME_PERIOD,
+                     max(REAL_TIME_PERIOD, REAL_TIME_SHARE * self.executor_turn))
+        return round(period * 1e3) * 1_000_000
+
+    def chunks(self, sim_time, other_due=lambda: math.inf):
+        """
+        Yield the step counts of one tick; the caller steps and publishes after each.
+
+        sim_time() gives the world's time now; other_due() the simulation time at which
+        something else (the camera) wants the stepping to stop, or infinity.
+        """
+        if self.free_running:
+            yield from self._free_running_chunks(sim_time, other_due)
+        else:
+            yield from self._real_time_chunks(sim_time, other_due)
+
+    def _real_time_chunks(self, sim_time, other_due):
+        wall_elapsed = self._wall_clock() - self._wall_anchor
+        target = self._sim_anchor + wall_elapsed * self.real_time_factor
+        behind = int((target - sim_time()) / self.timestep)
+        if behind > MAX_LAG / self.timestep:
+            behind = int(MAX_LAG / self.timestep)
+            # Go on from where this tick ends, as if the wall clock had waited for it.
+            self.anchor(sim_time() + behind * self.timestep)
+        while behind > 0:
+            steps = self.steps_to_next_due(sim_time(), other_due(), limit=behind)
+            yield steps
+            behind -= steps
+
+    def _free_running_chunks(self, sim_time, other_due):
+        budget = min(MAX_STEP_BUDGET, max(STEP_BUDGET, EXECUTOR_SHARE * self.executor_turn))
+        deadline = self._wall_clock() + budget
+        while True:
+            start = self._wall_clock()
+            if start >= deadline:
+                return
+            steps = self.free_running_chunk(sim_time(), start, deadline, other_due())
+            yield steps
+            self.step_wall_time += 0.5 * (
+                (self._wall_clock() - start) / steps - self.step_wall_time)
+
+    def steps_to_next_due(self, now, other_due=math.inf, *, limit):
+        """Return the steps until a stream (or other_due) falls due, 1 to limit."""
+        due = min(min(self._next_sim.values(), default=math.inf), other_due)
+        # Half a step of slack, as in take_due().
+        steps = (due - now) / self.timestep - 0.5
+        if steps >= limit:  # also when nothing is due at all
+            return limit
+        return max(1, math.ceil(steps))
+
+    def free_running_chunk(self, now, wall, deadline, other_due=math.inf):
+        """Return the steps until a stream falls due (simulation and wall time) or deadline."""
+        per_step = max(self.step_wall_time, 1e-7)
+        steps = (deadline - wall) / per_step
+        for name in self._periods:
+            steps = min(steps, max((self._next_sim[name] - now) / self.timestep,
+                                   (self._next_wall[name] - wall) / per_step))
+        steps = min(steps, (other_due - now) / self.timestep)
+        return max(1, math.ceil(steps - 0.5))
+
+    # --- streams ------------------------------------------------------------------------------
+
+    def take_due(self, now):
+        """Return the streams due at simulation time now, each scheduled for its next turn."""
+        # Half a step of slack: simulation time is a sum of steps and carries rounding errors.
+        soon = now + 0.5 * self.timestep
+        wall = self._wall_clock()
+        due = [name for name in self._periods
+               if soon >= self._next_sim[name] and wall >= self._next_wall[name]]
+        for name in due:
+            self.published(name, now)
+        return due
+
+    def published(self, name, now):
+        """Schedule a stream's next turn after it was published at simulation time now."""
+        period = self._periods[name]
+        self._next_sim[name] = now + period
+        self._next_wall[name] = self._wall_clock() + period if self.free_running else 0.0
+
+    def restart(self, now, names):
+        """Make streams due at once, at simulation time now (after a reset)."""
+        for name in names:
+            self._next_sim[name] = now
+            self._next_wall[name] = 0.0

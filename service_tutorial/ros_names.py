@@ -1,0 +1,83 @@
+"""ROS naming rules the world node applies to a spawn request; the simulation knows none."""
+
+from service_tutorial.sim.validation import quoted
+from service_tutorial.sim.validation import WorldError
+
+# Leaves room for the topic names under it within the DDS limit of about 250 characters.
+MAX_NAMESPACE_LENGTH = 200
+
+
+def normalise_namespace(namespace):
+    """Return a robot namespace as '' or '/a/b', or refuse what ROS would refuse."""
+    namespace = (namespace or '').strip()
+    tokens = [token for token in namespace.split('/') if token]
+    for token in tokens:
+        if not (token[0].isalpha() or token[0] == '_') or not all(
+                character.isalnum() or character == '_' for character in token) or (
+                not token.isascii()):
+            raise WorldError(f'robot namespace {quoted(namespace)} is not a valid ROS '
+                             f'namespace: its part {quoted(token)} must start with a letter '
+                             'or underscore and hold only ASCII letters, digits and '
+                             'underscores')
+    normalised = '/' + '/'.join(tokens) if tokens else ''
+    if len(normalised) > MAX_NAMESPACE_LENGTH:
+        raise WorldError(f'robot namespace {quoted(namespace)} is longer than '
+                         f'{MAX_NAMESPACE_LENGTH} characters')
+    return normalised
+
+
+def topic_prefix(namespace):
+    """Return what goes before a topic's relative name in a normalised namespace."""
+    return namespace + '/' if namespace else ''
+
+
+def plugin_topic(block, topic, *, robot_namespace='', ros1_tag=None):
+    """
+    Return the topic a Gazebo plugin block's topic ends up on, as gazebo_ros would put it.
+
+    topic is the plugin's own name for it: 'cmd_vel', or '~/out' for one under the plugin's
+    node. A ROS 1 block names it in ros1_tag (commandTopic, topicName...) instead. The
+    namespace is the spawn request's robot_namespace if it has one (gazebo_ros replaces the
+    plugin's namespace with it), else the block's <ros><namespace>, else its ROS 1
+    <robotNamespace>; then the first <remapping> or <argument> 'from:=to' whose expanded
+    'from' is this topic moves it. A name relative to the root stays relative, so that a
+    remapping of the world node still applies to it.
+    """
+    namespace = robot_namespace or _block_namespace(block)
+    node = block.name or 'plugin'
+    if ros1_tag is not None and block.text(ros1_tag):
+        topic = block.text(ros1_tag)
+    name = _expand(topic, namespace, node, block)
+    for rule in block.ros_remappings + block.ros_arguments:
+        source, separator, target = rule.partition(':=')
+        if separator and _expand(source.strip(), namespace, node, block) == name:
+            name = _expand(target.strip(), namespace, node, block)
+            break
+    return name
+
+
+def _block_namespace(block):
+    """Return the namespace a plugin block asks for itself, normalised."""
+    written = block.ros_namespace or block.text('robotNamespace', '')
+    try:
+        return normalise_namespace(written)
+    except WorldError:
+        raise WorldError(f'plugin {quoted(block.name)} has namespace {quoted(written)}, '
+                         'which is not a valid ROS namespace') from None
+
+
+def _expand(name, namespace, node, block):
+    """Expand a topic name the way rcl does: '~/' under the node, relative under namespace."""
+    if name.startswith('~/') or name == '~':
+        expanded = '/'.join(part for part in (namespace, node, name[2:]) if part)
+    elif name.startswith('/'):
+        expanded = name
+    else:
+        expanded = topic_prefix(namespace) + name
+    tokens = expanded.strip('/').split('/')
+    if not all(token and (token[0].isalpha() or token[0] == '_') and token.isascii() and all(
+            character.isalnum() or character == '_' for character in token)
+            for token in tokens):
+        raise WorldError(f'plugin {quoted(block.name)} names topic {quoted(name)}, which is '
+                         'not a valid ROS topic name')
+    return expanded

@@ -1,0 +1,169 @@
+"""One model spawned into the world: its description, its MuJoCo elements, state and plugins."""
+
+import itertools
+
+import mujoco
+import numpy as np
+from service_tutorial.sim import frames
+from service_tutorial.sim import plugins
+from service_tutorial.sim.validation import SCOPE_SEPARATOR
+
+# What a model's integration state is made of, in MjData, carried over when the spec is rebuilt.
+STATE_FIELDS = ('qpos', 'qvel', 'qacc_warmstart', 'qfrc_applied', 'act', 'ctrl')
+# Numbers the placements of every model (spawn, set state, reset), the latest highest.
+_PLACEMENTS = itertools.count(1)
+# Entries a joint has in qpos and in qvel, by type; hinges and slides have one of each.
+_JOINT_WIDTHS = {int(mujoco.mjtJoint.mjJNT_FREE): (7, 6), int(mujoco.mjtJoint.mjJNT_BALL): (4, 3)}
+
+
+class Model:
+    """
+    A spawned robot: its name, its URDF description, where it was spawned, and its plugins.
+
+    Its bodies, joints and actuators carry the prefix '<name>::' in the world's MuJoCo model;
+    the world calls bind() after every recompile, which finds them again by name.
+    """
+
+    def __init__(self, name, description, position, orientation):
+        """Describe a model whose URDF frame goes to a world pose; it has no elements yet."""
+        self.name = name
+        self.description = description
+        if description.anchored:
+            # The root link sits where the URDF's joint to the world link puts it.
+            position, orientation = frames.compose(position, orientation,
+                                                   description.root_position,
+                                                   description.root_orientation)
+        self.spawn_position = np.array(position, dtype=float)
+        self.spawn_orientation = np.array(orientation, dtype=float)
+        self.frame = None  # the frame of the world's spec the model's root is attached to
+        self.plugins = tuple(plugins.plugin_class(setup.kind)(setup.config, setup.block)
+                             for setup in description.plugins)
+        # When the world last placed it (spawn, set state, reset), and whether the world has
+        # since put it back at its spawn pose because it became unstable.
+        self.placed = 0
+        self.recovered = False
+        # Where its elements are in the compiled model, found again by bind().
+        self.root_id = 0
+        self.free_qpos_adr = self.free_dof_adr = None
+        self.qpos_index = self.dof_index = np.zeros(0, dtype=int)
+        self.act_index = self.actuator_index = np.zeros(0, dtype=int)
+        self.joint_qpos_adr = self.joint_dof_adr = np.zeros(0, dtype=int)
+
+    def scoped(self, element_name):
+        """Return the name a URDF element of this model has in the world's MuJoCo model."""
+        return self.name + SCOPE_SEPARATOR + element_name
+
+    @property
+    def anchored(self):
+        """Return True if the model is fixed to the world rather than free to move."""
+        return self.free_qpos_adr is None
+
+    def mark_placed(self):
+        """Note that the model was just put somewhere on purpose, not by a recovery."""
+        self.placed = next(_PLACEMENTS)
+        self.recovered = False
+
+    def plugin(self, plugin_type):
+        """Return the model's first plugin of a type, or None."""
+        return next((plugin for plugin in self.plugins if isinstance(plugin, plugin_type)),
+                    None)
+
+    def attach(self, spec):
+        """Attach the model's bodies to a world spec where it stands now, under its prefix."""
+        if self.frame is None:
+            position, orientation = self.spawn_position, self.spawn_orientation
+        else:
+            position, orientation = np.array(self.frame.pos), np.array(self.frame.quat)
+        self.frame = spec.worldbody.add_frame(pos=position, quat=orientation)
+        # Attaching renames the robot's own spec too; a copy keeps the description as loaded.
+        self.frame.attach_body(self.description.spec.copy().worldbody.first_body(),
+                               self.name + SCOPE_SEPARATOR, '')
+
+    def bind(self, world):
+        """Find the model's elements in the world's compiled model, then its plugins'."""
+        mj_model = world.model
+        description = self.description
+        body_ids = [mj_model.body(self.scoped(link)).id for link in description.links]
+        self.root_id = mj_model.body(self.scoped(description.root_link)).id
+        self.free_qpos_adr = self.free_dof_adr = None
+        qpos, dofs = [], []
+        for joint_id in np.nonzero(np.isin(mj_model.jnt_bodyid, body_ids))[0]:
+            kind = int(mj_model.jnt_type[joint_id])
+            qpos_adr = int(mj_model.jnt_qposadr[joint_id])
+            dof_adr = int(mj_model.jnt_dofadr[joint_id])
+            qpos_width, dof_width = _JOINT_WIDTHS.get(kind, (1, 1))
+            qpos.extend(range(qpos_adr, qpos_adr + qpos_width))
+            dofs.extend(range(dof_adr, dof_adr + dof_width))
+            if kind == mujoco.mjtJoint.mjJNT_FREE:
+                self.free_qpos_adr, self.free_dof_adr = qpos_adr, dof_adr
+        self.qpos_index = np.array(qpos, dtype=int)
+        self.dof_index = np.array(dofs, dtype=int)
+        named = [mj_model.joint(self.scoped(name)) for name in description.joints]
+        self.joint_qpos_adr = np.array([joint.qposadr[0] for joint in named], dtype=int)
+        self.joint_dof_adr = np.array([joint.dofadr[0] for joint in named], dtype=int)
+        actuators = [mj_model.actuator(self.scoped(name)) for name in description.actuators]
+        self.actuator_index = np.array([actuator.id for actuator in actuators], dtype=int)
+        self.act_index = np.array(
+            [address for actuator in actuators if actuator.actadr[0] >= 0
+             for address in range(actuator.actadr[0], actuator.actadr[0] + actuator.actnum[0])],
+            dtype=int)
+        for plugin in self.plugins:
+            plugin.bind(world, self)
+
+    def _state_index(self, field):
+        """Return the indices of the model's entries in an MjData array of STATE_FIELDS."""
+        if field == 'qpos':
+            return self.qpos_index
+        if field == 'act':
+            return self.act_index
+        if field == 'ctrl':
+            return self.actuator_index
+        return self.dof_index
+
+    def saved_state(self, data, fields=STATE_FIELDS):
+        """Return a copy of the model's share of the integration state, by MjData field."""
+        return {field: getattr(data, field)[self._state_index(field)].copy()
+                for field in fields}
+
+    def restore_state(self, data, saved):
+        """Write a share of the integration state saved by saved_state() back."""
+        for field, value in saved.items():
+            getattr(data, field)[self._state_index(field)] = value
+
+    def put_back(self, mj_model, data):
+        """Put the model's joints back at their spawn values, at rest."""
+        data.qpos[self.qpos_index] = mj_model.qpos0[self.qpos_index]
+        data.qvel[self.dof_index] = 0.0
+        data.qacc[self.dof_index] = 0.0
+        data.qacc_warmstart[self.dof_index] = 0.0
+
+    def reset_plugins(self):
+        """Let every plugin start again from rest."""
+        for plugin in self.plugins:
+            plugin.reset()
+
+    def place_anchored(self, mj_model, position, orientation):
+        """Move a model that has no free joint, in the compiled model and in the spec."""
+        mj_model.body_pos[self.root_id] = position
+        mj_model.body_quat[self.root_id] = orientation
+        self.frame.pos = position
+        self.frame.quat = orientation
+
+    def place(self, mj_model, data, state):
+        """Put the model's base at a world-frame state; an anchored model only takes the pose."""
+        if self.anchored:
+            self.place_anchored(mj_model, state.position, state.orientation)
+            return
+        qpos, dof = self.free_qpos_adr, self.free_dof_adr
+        data.qpos[qpos:qpos + 3] = state.position
+        data.qpos[qpos + 3:qpos + 7] = state.orientation
+        data.qvel[dof:dof + 3] = state.linear_velocity
+        # A free joint's angular velocity is expressed in the body frame.
+        data.qvel[dof + 3:dof + 6] = frames.rotate_back(state.orientation,
+                                                        state.angular_velocity)
+        data.qacc_warmstart[self.dof_index] = 0.0
+
+    def joint_state(self, data):
+        """Return (URDF joint names, positions, velocities) of the model's moving joints."""
+        return (list(self.description.joints), data.qpos[self.joint_qpos_adr].copy(),
+                data.qvel[self.joint_dof_adr].copy())

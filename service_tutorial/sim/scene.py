@@ -1,0 +1,44 @@
+"""The empty world every model is spawned into: physics options, ground, sky and sun."""
+
+import mujoco
+from service_tutorial.sim.urdf.builder import CONTACT_TIME_CONSTANT
+
+
+def make_scene(timestep, gravity):
+    """Return the spec of an empty world: physics options, ground, sky and sun."""
+    spec = mujoco.MjSpec()
+    spec.modelname = 'service_tutorial'
+    spec.compiler.degree = False
+    spec.compiler.inertiafromgeom = mujoco.mjtInertiaFromGeom.mjINERTIAFROMGEOM_FALSE
+    option = spec.option
+    option.timestep = timestep
+    option.gravity = gravity
+    # Velocity servos on light wheels need the implicit damping term to stay stable.
+    option.integrator = mujoco.mjtIntegrator.mjINT_IMPLICITFAST
+    option.cone = mujoco.mjtCone.mjCONE_ELLIPTIC
+    option.impratio = 10.0
+    # MuJoCo's automatic reset would reset every robot; the world resets only the robot that
+    # went unstable, see recovery.py.
+    option.disableflags |= mujoco.mjtDisableBit.mjDSBL_AUTORESET
+    texture = spec.add_texture(
+        name='ground_grid', type=mujoco.mjtTexture.mjTEXTURE_2D,
+        builtin=mujoco.mjtBuiltin.mjBUILTIN_CHECKER, mark=mujoco.mjtMark.mjMARK_EDGE,
+        rgb1=[0.25, 0.27, 0.3], rgb2=[0.32, 0.34, 0.37], markrgb=[0.6, 0.6, 0.6],
+        width=256, height=256)
+    material = spec.add_material(name='ground_grid', texrepeat=[1.0, 1.0],
+                                 texuniform=True, reflectance=0.1)
+    material.textures[mujoco.mjtTextureRole.mjTEXROLE_RGB] = texture.name
+    spec.add_texture(
+        name='sky', type=mujoco.mjtTexture.mjTEXTURE_SKYBOX,
+        builtin=mujoco.mjtBuiltin.mjBUILTIN_GRADIENT, rgb1=[0.55, 0.68, 0.82],
+        rgb2=[0.1, 0.12, 0.15], width=256, height=1536)
+    # A plane collides everywhere; its size only sets how far the floor is drawn.
+    spec.worldbody.add_geom(
+        name='ground_plane', type=mujoco.mjtGeom.mjGEOM_PLANE, size=[25.0, 25.0, 0.05],
+        material='ground_grid', friction=[1.0, 0.005, 0.0001],
+        solref=[CONTACT_TIME_CONSTANT, 1.0])
+    spec.worldbody.add_light(
+        name='sun', type=mujoco.mjtLightType.mjLIGHT_DIRECTIONAL, pos=[0.0, 0.0, 10.0],
+        dir=[0.3, 0.2, -1.0], diffuse=[0.7, 0.7, 0.7], specular=[0.2, 0.2, 0.2],
+        castshadow=False)
+    return spec

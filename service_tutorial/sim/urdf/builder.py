@@ -1,0 +1,345 @@
+"""
+Turn URDF text into a MuJoCo MjSpec, with the plugins its <gazebo> blocks ask for.
+
+The text goes through the hardened parser and structure checks of hardened_xml.py before
+yourdfpy sees it; mesh files follow the path rules of meshes.py.
+"""
+
+import dataclasses
+from dataclasses import dataclass
+import io
+import math
+
+from lxml import etree
+import mujoco
+import numpy as np
+from service_tutorial.sim import frames
+from service_tutorial.sim import plugins
+from service_tutorial.sim.urdf.gazebo import read_link_friction
+from service_tutorial.sim.urdf.gazebo import read_plugin_blocks
+from service_tutorial.sim.urdf.hardened_xml import check_structure
+from service_tutorial.sim.urdf.hardened_xml import parse_model_xml
+from service_tutorial.sim.urdf.hardened_xml import parse_numbers
+from service_tutorial.sim.urdf.hardened_xml import UrdfError
+from service_tutorial.sim.urdf.meshes import MeshLoader
+import yourdfpy
+
+WORLD_LINK = 'world'
+VISUAL_GROUP = 1
+COLLISION_GROUP = 3
+DEFAULT_VISUAL_RGBA = (0.7, 0.7, 0.7, 1.0)
+COLLISION_RGBA = (0.5, 0.2, 0.2, 0.5)
+# Contact stiffness as a time constant (s). Stiffer than MuJoCo's 0.02 so that a wheel sinks
+# only hundredths of a millimetre into the floor and rolls with its true radius.
+CONTACT_TIME_CONSTANT = 0.005
+DIFF_DRIVE = 'gazebo_ros_diff_drive'
+
+
+@dataclass(frozen=True)
+class RobotDescription:
+    """
+    A URDF robot built as a MuJoCo spec, ready to be attached to a world.
+
+    Bodies, joints and actuators carry the URDF names; a world adds its own prefix.
+    The root link gets a free joint, unless a URDF joint anchors it to a link named ``world``;
+    then root_position/root_orientation hold that joint's origin, which the world applies.
+    """
+
+    robot_name: str
+    spec: mujoco.MjSpec
+    root_link: str
+    anchored: bool
+    root_position: tuple
+    root_orientation: tuple
+    links: tuple
+    joints: tuple
+    actuators: tuple = ()
+    plugins: tuple = ()  # a plugins.PluginSetup for each <plugin> of a registered kind
+    mesh_files: tuple = ()
+
+    def plugin_config(self, kind):
+        """Return the configuration of the robot's first plugin of a kind, or None."""
+        return next((setup.config for setup in self.plugins if setup.kind == kind), None)
+
+    @property
+    def diff_drive(self):
+        """Return the DiffDriveConfig of the robot's diff-drive plugin, or None."""
+        return self.plugin_config(DIFF_DRIVE)
+
+
+def load_urdf(model_xml, *, base_dir=None, package_resolver=None, timestep=0.002):
+    """
+    Build a RobotDescription from URDF text, or raise UrdfError naming the problem.
+
+    timestep is the physics timestep of the world the robot goes to; plugins tune their
+    actuators (the wheel servos of a diff drive) for it.
+    """
+    root = parse_model_xml(model_xml)
+    check_structure(root)
+    for element in list(root.iter()):
+        # yourdfpy needs plain tags; namespaced extension elements play no part here.
+        if isinstance(element.tag, str) and etree.QName(element).namespace:
+            element.getparent().remove(element)
+    try:
+        urdf = yourdfpy.URDF.load(
+            io.BytesIO(etree.tostring(root)), build_scene_graph=False,
+            build_collision_scene_graph=False, load_meshes=False,
+            load_collision_meshes=False)
+    except Exception as error:
+        raise UrdfError(f'model_xml is not valid URDF: {error}') from None
+    if not urdf.validate():
+        raise UrdfError(f'model_xml is not valid URDF: {urdf.errors[0].msg}')
+    builder = _SpecBuilder(urdf.robot, base_dir, package_resolver, read_link_friction(root))
+    description = builder.build()
+    setups = _plugin_setups(read_plugin_blocks(root), urdf.robot)
+    for setup in setups:
+        plugins.plugin_class(setup.kind).build(description.spec, setup.config, timestep)
+    return dataclasses.replace(
+        description, plugins=setups,
+        actuators=tuple(actuator.name for actuator in description.spec.actuators))
+
+
+def _plugin_setups(blocks, robot):
+    """Configure every plugin block of a registered kind; refuse a second of a single kind."""
+    setups = []
+    for block in blocks:
+        kind = plugins.kind_of(block.filename)
+        if kind is None:
+            continue
+        plugin = plugins.plugin_class(kind)
+        if plugin.single and any(setup.kind == kind for setup in setups):
+            raise UrdfError(f'model_xml carries more than one {plugin.title} plugin')
+        setups.append(plugins.PluginSetup(kind, block, plugin.configure(block, robot)))
+    return tuple(setups)
+
+
+def _pose(matrix, what):
+    """Return (position, quaternion) of a 4x4 homogeneous transform."""
+    if matrix is None:
+        return np.zeros(3), np.array([1.0, 0.0, 0.0, 0.0])
+    matrix = np.asarray(matrix, dtype=float)
+    if not np.all(np.isfinite(matrix)):
+        raise UrdfError(f'{what} origin contains NaN or infinity')
+    return matrix[:3, 3].copy(), frames.matrix_quaternion(matrix[:3, :3])
+
+
+class _SpecBuilder:
+    """Walks a yourdfpy robot from its root link and adds MuJoCo bodies for every link."""
+
+    def __init__(self, robot, base_dir, package_resolver, friction):
+        self._robot = robot
+        self._friction = friction
+        self._links = {link.name: link for link in robot.links}
+        self._materials = {material.name: material for material in robot.materials
+                           if material.name}
+        self._spec = mujoco.MjSpec()
+        self._spec.compiler.degree = False
+        self._spec.compiler.inertiafromgeom = mujoco.mjtInertiaFromGeom.mjINERTIAFROMGEOM_FALSE
+        self._spec.strippath = False
+        self._meshes = MeshLoader(self._spec, base_dir, package_resolver)
+
+    def build(self):
+        """Return the finished spec and what a world needs to know about it."""
+        robot = self._robot
+        children = {}
+        parent_joint = {}
+        for joint in robot.joints:
+            for end in (joint.parent, joint.child):
+                if end not in self._links and end != WORLD_LINK:
+                    raise UrdfError(f"joint '{joint.name}' names missing link '{end}'")
+            if joint.child == WORLD_LINK:
+                raise UrdfError(f"joint '{joint.name}' makes '{WORLD_LINK}' a child link")
+            if joint.child in parent_joint:
+                raise UrdfError(f"link '{joint.child}' is the child of two joints: "
+                                f"'{parent_joint[joint.child].name}' and '{joint.name}'")
+            if joint.type not in ('fixed', 'revolute', 'continuous', 'prismatic'):
+                raise UrdfError(f"joint '{joint.name}' has type '{joint.type}', which is not "
+                                'supported (use fixed, revolute, continuous or prismatic)')
+            parent_joint[joint.child] = joint
+            children.setdefault(joint.parent, []).append(joint)
+
+        world_joints = children.get(WORLD_LINK, [])
+        if len(world_joints) > 1:
+            raise UrdfError(f"more than one joint attaches to the '{WORLD_LINK}' link")
+        roots = [name for name in self._links if name != WORLD_LINK and (
+            name not in parent_joint or parent_joint[name].parent == WORLD_LINK)]
+        if not roots:
+            if set(self._links) == {WORLD_LINK}:
+                raise UrdfError(f"model_xml has no link besides '{WORLD_LINK}'")
+            raise UrdfError('joints form a loop: every link is the child of a joint')
+        if len(roots) > 1:
+            raise UrdfError(f"model_xml has more than one root link: {', '.join(roots)}")
+        root = roots[0]
+
+        anchored = False
+        root_position = (0.0, 0.0, 0.0)
+        root_orientation = (1.0, 0.0, 0.0, 0.0)
+        root_body = self._spec.worldbody.add_body(name=root)
+        if world_joints:
+            world_joint = world_joints[0]
+            position, orientation = _pose(world_joint.origin, f"joint '{world_joint.name}'")
+            root_position, root_orientation = tuple(position), tuple(orientation)
+            anchored = True
+            if world_joint.type != 'fixed':
+                self._add_joint(root_body, world_joint)
+        else:
+            root_body.add_freejoint()
+        self._fill_link(root_body, root)
+
+        visited = {root}
+        joint_names = [joint.name for joint in world_joints if joint.type != 'fixed']
+        stack = [(root_body, joint) for joint in reversed(children.get(root, []))]
+        while stack:
+            parent_body, joint = stack.pop()
+            if joint.child in visited:
+                raise UrdfError(f"joints form a loop at link '{joint.child}'")
+            visited.add(joint.child)
+            position, orientation = _pose(joint.origin, f"joint '{joint.name}'")
+            body = parent_body.add_body(name=joint.child, pos=position, quat=orientation)
+            if joint.type != 'fixed':
+                self._add_joint(body, joint)
+                joint_names.append(joint.name)
+            self._fill_link(body, joint.child)
+            stack.extend((body, child) for child in reversed(children.get(joint.child, [])))
+        unreached = [name for name in self._links if name not in visited and name != WORLD_LINK]
+        if unreached:
+            raise UrdfError(f"joints form a loop: links {', '.join(unreached)} are not "
+                            f"reached from root link '{root}'")
+        links = tuple(name for name in self._links if name != WORLD_LINK)
+        return RobotDescription(
+            robot_name=robot.name, spec=self._spec, root_link=root, anchored=anchored,
+            root_position=root_position, root_orientation=root_orientation, links=links,
+            joints=tuple(joint_names), mesh_files=tuple(self._meshes.files))
+
+    def _add_joint(self, body, joint):
+        axis = np.asarray(joint.axis if joint.axis is not None else (1.0, 0.0, 0.0), float)
+        if axis.shape != (3,) or not np.all(np.isfinite(axis)):
+            raise UrdfError(f"joint '{joint.name}' axis is not three finite numbers")
+        norm = np.linalg.norm(axis)
+        if norm < 1e-9:
+            raise UrdfError(f"joint '{joint.name}' axis is zero")
+        kind = (mujoco.mjtJoint.mjJNT_SLIDE if joint.type == 'prismatic'
+                else mujoco.mjtJoint.mjJNT_HINGE)
+        mj_joint = body.add_joint(name=joint.name, type=kind, axis=axis / norm)
+        if joint.type in ('revolute', 'prismatic'):
+            lower, upper = float(joint.limit.lower), float(joint.limit.upper)
+            if not lower < upper:
+                raise UrdfError(f"joint '{joint.name}' limit lower {lower} is not below "
+                                f'upper {upper}')
+            mj_joint.limited = mujoco.mjtLimited.mjLIMITED_TRUE
+            mj_joint.range = [lower, upper]
+        else:
+            mj_joint.limited = mujoco.mjtLimited.mjLIMITED_FALSE
+        if joint.dynamics is not None:
+            for attribute, target in (('damping', 'damping'), ('friction', 'frictionloss')):
+                text = getattr(joint.dynamics, attribute)
+                if text is None:
+                    continue
+                value = parse_numbers(str(text), f"joint '{joint.name}' {attribute}")
+                if len(value) != 1 or value[0] < 0.0:
+                    raise UrdfError(f"joint '{joint.name}' {attribute} must be one number "
+                                    f">= 0: '{text}'")
+                if target == 'damping':
+                    # The first coefficient is the linear one; the rest are higher orders.
+                    mj_joint.damping = [value[0]] + [0.0] * (len(mj_joint.damping) - 1)
+                else:
+                    mj_joint.frictionloss = value[0]
+
+    def _fill_link(self, body, link_name):
+        link = self._links[link_name]
+        self._set_inertia(body, link)
+        for visual in link.visuals:
+            geom = self._add_geom(body, visual.geometry, visual.origin, link_name)
+            if geom.type == mujoco.mjtGeom.mjGEOM_MESH:
+                # Visual meshes are often open surfaces; they carry no mass here anyway.
+                self._spec.mesh(geom.meshname).inertia = mujoco.mjtMeshInertia.mjMESH_INERTIA_SHELL
+            geom.contype = 0
+            geom.conaffinity = 0
+            geom.group = VISUAL_GROUP
+            geom.rgba = self._visual_rgba(visual, link_name)
+        mu = self._friction.get(link_name)
+        for collision in link.collisions:
+            geom = self._add_geom(body, collision.geometry, collision.origin, link_name)
+            geom.group = COLLISION_GROUP
+            geom.rgba = COLLISION_RGBA
+            geom.solref = [CONTACT_TIME_CONSTANT, 1.0]
+            if mu is not None:
+                # ODE combines the friction of two surfaces with min(); MuJoCo takes the
+                # higher-priority geom's, so the link's own setting wins over the floor's.
+                geom.priority = 1
+                geom.friction[0] = min(mu)
+                if max(mu) == 0.0:
+                    geom.condim = 1
+
+    def _set_inertia(self, body, link):
+        inertial = link.inertial
+        body.explicitinertial = True
+        if inertial is None or inertial.mass is None:
+            body.mass = 0.0
+            body.inertia = [0.0, 0.0, 0.0]
+            return
+        mass = float(inertial.mass)
+        if not math.isfinite(mass) or mass <= 0.0:
+            raise UrdfError(f"link '{link.name}' mass must be positive: {mass}")
+        position, orientation = _pose(inertial.origin, f"link '{link.name}' inertial")
+        tensor = np.asarray(inertial.inertia if inertial.inertia is not None else np.eye(3),
+                            dtype=float)
+        if not np.all(np.isfinite(tensor)):
+            raise UrdfError(f"link '{link.name}' inertia contains NaN or infinity")
+        moments, axes = np.linalg.eigh(frames.rotate_tensor(orientation, tensor))
+        if moments[0] <= 0.0:
+            raise UrdfError(f"link '{link.name}' inertia is not positive definite "
+                            f'(principal moments {moments.tolist()})')
+        if np.linalg.det(axes) < 0.0:
+            axes[:, 2] = -axes[:, 2]
+        principal = frames.matrix_quaternion(axes)
+        body.mass = mass
+        body.ipos = position
+        body.iquat = principal
+        body.inertia = moments
+
+    def _add_geom(self, body, geometry, origin, link_name):
+        what = f"link '{link_name}'"
+        position, orientation = _pose(origin, f'{what} geometry')
+        geom = body.add_geom(pos=position, quat=orientation)
+        if geometry.box is not None:
+            size = np.asarray(geometry.box.size, dtype=float)
+            self._check_size(size, 3, f'{what} box size')
+            geom.type = mujoco.mjtGeom.mjGEOM_BOX
+            geom.size = size / 2.0
+        elif geometry.cylinder is not None:
+            size = np.array([geometry.cylinder.radius, geometry.cylinder.length], float)
+            self._check_size(size, 2, f'{what} cylinder radius and length')
+            geom.type = mujoco.mjtGeom.mjGEOM_CYLINDER
+            geom.size = [size[0], size[1] / 2.0, 0.0]
+        elif geometry.sphere is not None:
+            size = np.array([geometry.sphere.radius], float)
+            self._check_size(size, 1, f'{what} sphere radius')
+            geom.type = mujoco.mjtGeom.mjGEOM_SPHERE
+            geom.size = [size[0], 0.0, 0.0]
+        elif geometry.mesh is not None:
+            mesh_name = self._meshes.add(geometry.mesh, what)
+            geom.type = mujoco.mjtGeom.mjGEOM_MESH
+            geom.meshname = mesh_name
+        else:
+            raise UrdfError(f'{what} has a <geometry> without shape')
+        return geom
+
+    @staticmethod
+    def _check_size(size, count, what):
+        if size.shape != (count,) or not np.all(np.isfinite(size)) or np.any(size <= 0.0):
+            raise UrdfError(f'{what} must be {count} positive numbers: {size.tolist()}')
+
+    def _visual_rgba(self, visual, link_name):
+        material = visual.material
+        color = None
+        if material is not None:
+            color = material.color
+            if color is None and material.name in self._materials:
+                color = self._materials[material.name].color
+        if color is None:
+            return DEFAULT_VISUAL_RGBA
+        rgba = np.asarray(color.rgba, dtype=float)
+        if rgba.shape != (4,) or not np.all(np.isfinite(rgba)):
+            raise UrdfError(f"link '{link_name}' material colour must be four finite numbers")
+        return np.clip(rgba, 0.0, 1.0)

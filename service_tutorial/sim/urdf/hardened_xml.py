@@ -1,0 +1,130 @@
+"""
+Hardened parsing of URDF text, and the checks of its structure made before yourdfpy reads it.
+
+Documents with a DOCTYPE are refused, so external entities and entity-expansion bombs never
+reach a parser that would resolve them.
+"""
+
+import math
+
+from lxml import etree
+from service_tutorial.sim.validation import quoted
+
+MAX_MODEL_XML_BYTES = 10 * 1024 * 1024
+JOINT_TYPES = ('fixed', 'revolute', 'continuous', 'prismatic', 'floating', 'planar')
+XACRO_NAMESPACE = 'http://www.ros.org/wiki/xacro'
+
+
+class UrdfError(ValueError):
+    """A URDF the loader refuses; the message names the cause and the offending value."""
+
+
+def parse_model_xml(model_xml):
+    """Parse model_xml with a hardened parser and return the <robot> root element."""
+    data = model_xml.encode('utf-8') if isinstance(model_xml, str) else bytes(model_xml)
+    if len(data) > MAX_MODEL_XML_BYTES:
+        raise UrdfError(
+            f'model_xml is {len(data)} bytes, more than the limit of {MAX_MODEL_XML_BYTES}')
+    if not data.strip():
+        raise UrdfError('model_xml is empty')
+    if b'\x00' in data:
+        # UTF-16 or UTF-32 text would slip past the byte scan for a DOCTYPE below.
+        raise UrdfError('model_xml must be UTF-8 text')
+    # A DTD is the only way to declare entities; refusing it outright means nothing is
+    # ever fetched or expanded, whatever the parser would have done.
+    if b'<!DOCTYPE' in data or b'<!ENTITY' in data:
+        raise UrdfError('model_xml contains a DOCTYPE or ENTITY declaration, which is refused')
+    parser = etree.XMLParser(
+        resolve_entities=False, no_network=True, load_dtd=False, dtd_validation=False,
+        huge_tree=False, remove_comments=True, remove_pis=True)
+    try:
+        root = etree.fromstring(data, parser)
+    except (etree.XMLSyntaxError, ValueError) as error:
+        raise UrdfError(f'model_xml does not parse as XML: {error}') from None
+    if root.getroottree().docinfo.doctype:
+        raise UrdfError('model_xml contains a DOCTYPE declaration, which is refused')
+    tag = etree.QName(root).localname
+    if tag != 'robot' or etree.QName(root).namespace:
+        raise UrdfError(f'model_xml is not URDF: root element is <{tag}>')
+    for element in root.iter():
+        if isinstance(element.tag, str) and etree.QName(element).namespace == XACRO_NAMESPACE:
+            raise UrdfError('model_xml contains xacro macros; run xacro on it first')
+    return root
+
+
+def check_structure(root):
+    """Refuse the structural faults yourdfpy would report with a bare KeyError."""
+    if not root.get('name'):
+        raise UrdfError('model_xml is not valid URDF: <robot> has no name attribute')
+    links = root.findall('link')
+    if not links:
+        raise UrdfError('model_xml has no <link>')
+    link_names = set()
+    for link in links:
+        _new_name(link, link_names)
+    joint_names = set()
+    for joint in root.findall('joint'):
+        name = _new_name(joint, joint_names)
+        for end in ('parent', 'child'):
+            element = joint.find(end)
+            if element is None or not element.get('link'):
+                raise UrdfError(f"joint '{name}' has no <{end} link=...>")
+        kind = joint.get('type')
+        if not kind:
+            raise UrdfError(f"joint '{name}' has no type attribute")
+        if kind not in JOINT_TYPES:
+            raise UrdfError(f"joint '{name}' has unknown type '{kind}'")
+        check_numbers(joint, f"joint '{name}'")
+    for link in links:
+        check_numbers(link, f"link '{link.get('name')}'")
+        for geometry in link.iter('geometry'):
+            if len(geometry) == 0:
+                raise UrdfError(f"link '{link.get('name')}' has an empty <geometry>")
+
+
+def _new_name(element, names):
+    """Return the name of a <link> or <joint>, refusing none and one already in names."""
+    name = element.get('name')
+    if not name:
+        raise UrdfError(f'a <{element.tag}> has no name attribute')
+    if name in names:
+        raise UrdfError(f"{element.tag} '{name}' is defined twice")
+    names.add(name)
+    return name
+
+
+# Attributes that hold numbers, by element, and how many numbers each may hold.
+_NUMERIC_ATTRIBUTES = {
+    'origin': {'xyz': (3,), 'rpy': (3,)}, 'axis': {'xyz': (3,)},
+    'dynamics': {'damping': (1,), 'friction': (1,)},
+    'limit': {'lower': (1,), 'upper': (1,), 'effort': (1,), 'velocity': (1,)},
+    'mass': {'value': (1,)},
+    'inertia': {key: (1,) for key in ('ixx', 'ixy', 'ixz', 'iyy', 'iyz', 'izz')},
+    'box': {'size': (3,)}, 'cylinder': {'radius': (1,), 'length': (1,)},
+    'sphere': {'radius': (1,)}, 'mesh': {'scale': (1, 3)}, 'color': {'rgba': (4,)}}
+
+
+def check_numbers(element, what):
+    """Refuse numeric attributes below element that do not hold the numbers they should."""
+    for child in element.iter(*_NUMERIC_ATTRIBUTES):
+        for key, counts in _NUMERIC_ATTRIBUTES[child.tag].items():
+            text = child.get(key)
+            if text is None:
+                continue
+            where = f'{what} <{child.tag} {key}>'
+            values = parse_numbers(text, where)
+            if len(values) not in counts:
+                expected = ' or '.join(str(count) for count in counts)
+                raise UrdfError(f'{where} must hold {expected} numbers, not {len(values)}: '
+                                f'{quoted(text)}')
+
+
+def parse_numbers(text, what):
+    """Return the numbers of a whitespace- or comma-separated text; refuse NaN and infinity."""
+    try:
+        values = [float(token) for token in text.replace(',', ' ').split()]
+    except ValueError:
+        raise UrdfError(f'{what} is not a number: {quoted(text)}') from None
+    if not all(math.isfinite(value) for value in values):
+        raise UrdfError(f'{what} contains NaN or infinity: {quoted(text)}')
+    return values

@@ -1,0 +1,409 @@
+"""
+The simulated world: ground, light, gravity and the models spawned into it.
+
+World is the only owner of the MuJoCo spec, model and data, and of the registry of models.
+Models are attached to the live spec and the model is recompiled in place, so spawning or
+deleting one model leaves the state of every other model exactly as it was.
+"""
+
+import logging
+import math
+import os
+import types
+
+import mujoco
+import numpy as np
+from service_tutorial.sim import frames
+from service_tutorial.sim import plugins
+from service_tutorial.sim import scene
+from service_tutorial.sim import validation
+from service_tutorial.sim.frames import ModelState
+from service_tutorial.sim.model import Model
+from service_tutorial.sim.plugins.diff_drive import DiffDrive
+from service_tutorial.sim.recovery import Recovery
+from service_tutorial.sim.recovery import take_steps
+from service_tutorial.sim.urdf.builder import load_urdf
+from service_tutorial.sim.urdf.hardened_xml import MAX_MODEL_XML_BYTES
+from service_tutorial.sim.urdf.hardened_xml import UrdfError
+from service_tutorial.sim.validation import quoted
+from service_tutorial.sim.validation import WorldError
+
+# The world's log: one name for everything that happens to its models.
+_logger = logging.getLogger('service_tutorial.world')
+
+
+def _log_mujoco_warning(message):
+    _logger.warning('MuJoCo: %s', message)
+
+
+def _route_mujoco_messages():
+    """Send MuJoCo warnings to logging; never let MuJoCo write MUJOCO_LOG.TXT."""
+    mujoco.set_mju_user_warning(_log_mujoco_warning)
+    config = mujoco.MjLogConfig.get()
+    config.logto_file = False
+    config.set()
+
+
+def _compile_error(error):
+    """Return a MuJoCo compiler error as one line, without its 'Error: ' prefix."""
+    reason = '; '.join(line.strip() for line in str(error).splitlines() if line.strip())
+    return reason[len('Error: '):] if reason.startswith('Error: ') else reason
+
+
+def _saved_state(models, data):
+    """Return a copy of each model's share of the integration state, by model name."""
+    return {name: model.saved_state(data) for name, model in models.items()}
+
+
+def _restore_state(models, data, saved):
+    """Write saved shares of the integration state back, at the models' current places."""
+    for name, values in saved.items():
+        models[name].restore_state(data, values)
+
+
+class World:
+    """
+    A MuJoCo world with a ground plane into which URDF robots are spawned and deleted.
+
+    rebuild(), forward(), state_changed(), schedule_events() and body_state() are there for
+    the core's own pieces, recovery and plugins; nodes use the rest.
+    """
+
+    def __init__(self, *, timestep=0.002, gravity=(0.0, 0.0, -9.81), cmd_vel_timeout=0.5,
+                 package_resolver=None):
+        """
+        Create an empty world.
+
+        package_resolver maps a package name to its share folder, for package:// meshes;
+        without one, such meshes are refused.
+        """
+        timestep = validation.finite_number(timestep, 'timestep')
+        if timestep <= 0.0:
+            raise WorldError(f'timestep must be positive: {timestep}')
+        gravity = validation.vector(gravity, 3, 'gravity')
+        cmd_vel_timeout = validation.finite_number(cmd_vel_timeout, 'cmd_vel_timeout')
+        if cmd_vel_timeout < 0.0:
+            raise WorldError(f'cmd_vel_timeout must not be negative: {cmd_vel_timeout}')
+        _route_mujoco_messages()
+        self._timestep = timestep
+        self._gravity = gravity
+        self._cmd_vel_timeout = cmd_vel_timeout
+        self._package_resolver = package_resolver
+        self._paused = False
+        self._models = {}
+        self._next_event = math.inf
+        self._kinematics_fresh = False
+        self._spec = scene.make_scene(timestep, gravity)
+        self._model = self._spec.compile()
+        self._data = mujoco.MjData(self._model)
+        self._recovery = Recovery(self)
+        self.forward()
+
+    # ---------------------------------------------------------------- accessors
+
+    @property
+    def model(self):
+        """Return the compiled MjModel; re-read it after every spawn or delete."""
+        return self._model
+
+    @property
+    def data(self):
+        """Return the MjData; re-read it after every spawn or delete."""
+        return self._data
+
+    @property
+    def time(self):
+        """Return the simulation time in seconds."""
+        return float(self._data.time)
+
+    @property
+    def timestep(self):
+        """Return the physics timestep in seconds."""
+        return self._timestep
+
+    @property
+    def paused(self):
+        """Return True while physics is paused."""
+        return self._paused
+
+    @property
+    def models(self):
+        """Return the spawned models by name, in spawn order (a read-only mapping)."""
+        return types.MappingProxyType(self._models)
+
+    def model_names(self):
+        """Return the names of the spawned models, in spawn order."""
+        return list(self._models)
+
+    def take_removed_models(self):
+        """Return the models the world removed by itself because they kept blowing up."""
+        return self._recovery.take_removed()
+
+    def has_model(self, name):
+        """Return True if a model of that name exists."""
+        return name in self._models
+
+    def diff_drive_models(self):
+        """Return the names of the models that carry a diff drive."""
+        return [name for name, model in self._models.items() if model.plugin(DiffDrive)]
+
+    def diff_drive(self, name):
+        """Return the DiffDriveConfig of a model's diff drive."""
+        return self._diff_drive(name).config
+
+    def _spawned(self, name):
+        model = self._models.get(name) if isinstance(name, str) else None
+        if model is None:
+            raise WorldError(f'no model named {quoted(str(name))}')
+        return model
+
+    def _diff_drive(self, name):
+        drive = self._spawned(name).plugin(DiffDrive)
+        if drive is None:
+            raise WorldError(f"model '{name}' has no diff drive")
+        return drive
+
+    # ---------------------------------------------------------------- spawn and delete
+
+    def spawn_urdf(self, name, urdf_xml, *, position=(0.0, 0.0, 0.0),
+                   orientation=frames.IDENTITY_QUATERNION, reference_frame='', base_dir=None):
+        """Add a robot from URDF text; a refused request leaves the world unchanged."""
+        validation.check_model_name(name)
+        if name in self._models:
+            raise WorldError(f'a model named {quoted(name)} already exists')
+        position = validation.position(position)
+        orientation = validation.unit_quaternion(orientation)
+        frame = self._frame_state(reference_frame)
+        world_position, world_orientation = frames.compose(
+            frame.position, frame.orientation, position, orientation)
+        try:
+            description = load_urdf(urdf_xml, base_dir=base_dir,
+                                    package_resolver=self._package_resolver,
+                                    timestep=self._timestep)
+        except UrdfError as error:
+            raise WorldError(str(error)) from None
+        model = Model(name, description, world_position, world_orientation)
+        # MuJoCo carries positions, velocities and controls over a recompile, not the rest.
+        saved = _saved_state(self._models, self._data)
+        try:
+            model.attach(self._spec)
+            mj_model, data = self._spec.recompile(self._model, self._data)
+        except Exception as error:
+            # The live spec still holds the half-attached robot: build it afresh without it.
+            self.rebuild(self._models)
+            reason = _compile_error(error)
+            raise WorldError(f"model '{name}' does not compile: {reason}") from None
+        self._model, self._data = mj_model, data
+        self._models[name] = model
+        model.mark_placed()
+        self._after_recompile()
+        _restore_state(self._models, self._data, saved)
+        failure = self.forward()
+        if failure is not None:
+            self.rebuild({other: kept for other, kept in self._models.items() if other != name})
+            raise WorldError(f"model '{name}' cannot be simulated at "
+                             f'{model.spawn_position.tolist()}: {failure}; does it overlap '
+                             'other models?')
+        model.reset_plugins()
+        self.schedule_events()
+        _logger.info("spawned model '%s' at %s", name,
+                     np.round(model.spawn_position, 4).tolist())
+
+    def spawn_urdf_file(self, name, path, **kwargs):
+        """Add a robot from a URDF file; relative mesh paths resolve against its folder."""
+        try:
+            with open(path, 'rb') as urdf_file:
+                urdf_xml = urdf_file.read(MAX_MODEL_XML_BYTES + 1)
+        except OSError as error:
+            raise WorldError(f"cannot read URDF file '{path}': {error.strerror}") from None
+        kwargs.setdefault('base_dir', os.path.dirname(os.path.abspath(path)))
+        self.spawn_urdf(name, urdf_xml, **kwargs)
+
+    def delete_model(self, name):
+        """Remove a model; every other model keeps its state."""
+        self._spawned(name)
+        self.rebuild({other: model for other, model in self._models.items() if other != name})
+        _logger.info("deleted model '%s'", name)
+
+    def rebuild(self, models):
+        """
+        Build the spec, model and data afresh, holding just the given models (name -> Model).
+
+        A spec keeps a copy of every robot ever attached to it, deleted or not, so deleting
+        from the live spec would make a long-running world grow without bound. A fresh spec
+        holds only the live robots; their integration state is carried over, so the
+        simulation goes on exactly as if the spec had been edited in place.
+        """
+        spec = scene.make_scene(self._timestep, self._gravity)
+        for model in models.values():
+            model.attach(spec)
+        mj_model = spec.compile()
+        data = mujoco.MjData(mj_model)
+        data.time = self._data.time
+        saved = _saved_state(models, self._data)
+        self._spec, self._model, self._data, self._models = spec, mj_model, data, models
+        self._after_recompile()
+        _restore_state(self._models, self._data, saved)
+        self.forward()
+
+    def _after_recompile(self):
+        self._kinematics_fresh = False
+        self._recovery.resize()
+        for model in self._models.values():
+            model.bind(self)
+        self.schedule_events()
+
+    def forward(self):
+        """
+        Compute what follows from the state; return why MuJoCo could not, or None.
+
+        If MuJoCo could not, the next step fails the same way and its recovery sorts it out.
+        """
+        self._kinematics_fresh = False
+        try:
+            mujoco.mj_forward(self._model, self._data)
+        except mujoco.FatalError as error:
+            reason = str(error).splitlines()[0]
+            _logger.warning('MuJoCo: %s', reason)
+            return reason
+        return None
+
+    def state_changed(self):
+        """Note that the state was written outside a step: positions must be computed again."""
+        self._kinematics_fresh = False
+
+    # ---------------------------------------------------------------- stepping
+
+    def pause(self):
+        """Stop physics: step() takes no steps until physics is resumed."""
+        self._paused = True
+
+    def unpause(self):
+        """Let physics run again."""
+        self._paused = False
+
+    def step(self, count=1):
+        """Advance count physics steps unless paused; return the number of steps taken."""
+        count = int(count)
+        if count < 0:
+            raise WorldError(f'step count must not be negative: {count}')
+        if self._paused or count == 0:
+            return 0
+        remaining = count
+        while remaining > 0:
+            # Re-read every chunk: recovering from an instability may rebuild model and data.
+            model, data = self._model, self._data
+            chunk = remaining
+            if self._next_event < math.inf:
+                steps_to_event = math.ceil((self._next_event - data.time) / self._timestep - 1e-6)
+                chunk = min(chunk, max(1, steps_to_event))
+            self._recovery.start_chunk()
+            completed = take_steps(model, data, chunk)
+            remaining -= chunk
+            if not (completed and self._recovery.state_is_sane()):
+                self._recovery.recover(chunk)
+            if self._data.time >= self._next_event - 0.5 * self._timestep:
+                self._update_plugins()
+        self._kinematics_fresh = False
+        return count
+
+    def schedule_events(self):
+        """Work out when a plugin next needs its update()."""
+        self._next_event = plugins.next_event(self._models.values())
+
+    def _update_plugins(self):
+        plugins.update_due(self._models.values(), self._data.time + 0.5 * self._timestep)
+        self.schedule_events()
+
+    # ---------------------------------------------------------------- resets
+
+    def reset_simulation(self):
+        """Put time to zero and every model back to its spawn pose at rest."""
+        self._reset(keep_time=False)
+
+    def reset_world(self):
+        """Put every model back to its spawn pose at rest; time goes on."""
+        self._reset(keep_time=True)
+
+    def _reset(self, keep_time):
+        time = self._data.time
+        mujoco.mj_resetData(self._model, self._data)
+        if keep_time:
+            self._data.time = time
+        for model in self._models.values():
+            model.mark_placed()
+            if model.anchored:
+                model.place_anchored(self._model, model.spawn_position, model.spawn_orientation)
+        self.forward()
+        for model in self._models.values():
+            model.reset_plugins()
+        self.schedule_events()
+
+    # ---------------------------------------------------------------- frames and state
+
+    def body_state(self, body_id):
+        """Return a body's pose and twist in the world frame, as a ModelState."""
+        if not self._kinematics_fresh:
+            mujoco.mj_kinematics(self._model, self._data)
+            mujoco.mj_comPos(self._model, self._data)
+            mujoco.mj_comVel(self._model, self._data)
+            self._kinematics_fresh = True
+        return frames.body_state(self._model, self._data, body_id)
+
+    def _frame_state(self, reference_frame):
+        return self.body_state(frames.frame_body(reference_frame, self._models, self._model))
+
+    def get_model_state(self, name, reference_frame=''):
+        """
+        Return the pose and twist of a model's base link relative to reference_frame.
+
+        The twist is the difference of the two frames' velocities, expressed in the reference
+        frame, as gazebo_ros reports it.
+        """
+        model = self._spawned(name)
+        frame = self._frame_state(reference_frame)
+        return frames.expressed_in(frame, self.body_state(model.root_id))
+
+    def set_model_state(self, name, *, position, orientation, linear_velocity=(0.0, 0.0, 0.0),
+                        angular_velocity=(0.0, 0.0, 0.0), reference_frame=''):
+        """Move a model's base link to a pose and twist given in reference_frame."""
+        model = self._spawned(name)
+        relative = ModelState(
+            position=validation.position(position),
+            orientation=validation.unit_quaternion(orientation),
+            linear_velocity=validation.vector(linear_velocity, 3, 'linear_velocity'),
+            angular_velocity=validation.vector(angular_velocity, 3, 'angular_velocity'))
+        validation.check_velocity(relative.linear_velocity, 'linear_velocity', name)
+        validation.check_velocity(relative.angular_velocity, 'angular_velocity', name)
+        if model.anchored and (np.any(relative.linear_velocity)
+                               or np.any(relative.angular_velocity)):
+            raise WorldError(f"model '{name}' is anchored to the world; it cannot be given "
+                             'a velocity')
+        model.place(self._model, self._data,
+                    frames.in_world(self._frame_state(reference_frame), relative))
+        model.mark_placed()
+        self._kinematics_fresh = False
+
+    def joint_state(self, name):
+        """Return (URDF joint names, positions, velocities) of a model's moving joints."""
+        return self._spawned(name).joint_state(self._data)
+
+    # ---------------------------------------------------------------- diff drive
+
+    def command_velocity(self, name, linear_x, angular_z):
+        """
+        Command a diff-drive robot's body twist; it lapses after cmd_vel_timeout seconds.
+
+        Return the (linear_x, angular_z) carried out: DiffDrive.command() scales a command
+        that would turn a wheel rim faster than MAX_WHEEL_RIM_SPEED down to that speed.
+        """
+        drive = self._diff_drive(name)
+        linear_x = validation.finite_number(linear_x, 'linear_x')
+        angular_z = validation.finite_number(angular_z, 'angular_z')
+        applied = drive.command(linear_x, angular_z, self._cmd_vel_timeout)
+        self.schedule_events()
+        return applied
+
+    def odometry(self, name):
+        """Return the odometry of a diff-drive robot, from its encoders or ground truth."""
+        return self._diff_drive(name).odometry()

@@ -1,0 +1,179 @@
+"""The world node's pacing scheduler, driven by fake wall and CPU clocks: no ROS, no physics."""
+
+import math
+
+import pytest
+from service_tutorial import pacing
+from service_tutorial.pacing import Pacer
+
+TIMESTEP = 0.002
+RATES = {'clock': 250.0, 'odom': 50.0}  # Hz of simulation time: every 2 and every 10 steps
+
+
+class FakeClock:
+    """A clock that stands still until a test moves it."""
+
+    def __init__(self):
+        self.now = 0.0
+
+    def __call__(self):
+        return self.now
+
+
+class FakeWorld:
+    """Counts steps like a world, costs wall time per step, and records what was published."""
+
+    def __init__(self, pacer, wall, step_cost=0.0):
+        self.pacer = pacer
+        self.wall = wall
+        self.step_cost = step_cost
+        self.steps = 0
+        self.chunks = []
+        self.published = {name: [] for name in RATES}
+        self.other_due = math.inf
+
+    @property
+    def time(self):
+        return self.steps * TIMESTEP
+
+    def tick(self):
+        """Do what the node's step callback does: step chunk by chunk, publish what is due."""
+        for steps in self.pacer.chunks(lambda: self.time, lambda: self.other_due):
+            self.steps += steps
+            self.wall.now += steps * self.step_cost
+            self.chunks.append(steps)
+            self.publish_due()
+        self.publish_due()
+
+    def publish_due(self):
+        for name in self.pacer.take_due(self.time):
+            self.published[name].append(self.steps)
+
+
+def make(real_time_factor, step_cost=0.0):
+    """Return a pacer on fake clocks and a fake world it paces, anchored at time 0."""
+    wall, cpu = FakeClock(), FakeClock()
+    pacer = Pacer(timestep=TIMESTEP, real_time_factor=real_time_factor,
+                  periods={name: 1.0 / rate for name, rate in RATES.items()},
+                  wall_clock=wall, cpu_clock=cpu)
+    world = FakeWorld(pacer, wall, step_cost)
+    pacer.anchor(world.time)
+    return pacer, world, wall, cpu
+
+
+def test_real_time_steps_as_far_as_the_wall_clock_went_and_publishes_at_the_rates():
+    pacer, world, wall, _ = make(1.0)
+    world.tick()
+    assert world.steps == 0 and world.published == {'clock': [0], 'odom': [0]}
+    wall.now += 0.1
+    world.tick()
+    assert world.steps == 50
+    # The chunks end where /clock falls due, so every stream goes out on its own step.
+    assert world.chunks == [2] * 25
+    assert world.published['clock'] == list(range(0, 51, 2))
+    assert world.published['odom'] == [0, 10, 20, 30, 40, 50]
+
+
+def test_real_time_factor_two_runs_twice_as_fast():
+    pacer, world, wall, _ = make(2.0)
+    for _ in range(5):
+        wall.now += 0.02
+        world.tick()
+    assert world.steps == 100
+
+
+def test_real_time_does_not_catch_up_more_than_a_tenth_of_a_second():
+    pacer, world, wall, _ = make(1.0)
+    wall.now += 0.5  # the machine stalled
+    world.tick()
+    assert world.steps == round(pacing.MAX_LAG / TIMESTEP)
+    # From here on, real time counts from the end of the stall, not from before it.
+    wall.now += 0.01
+    world.tick()
+    assert world.steps == 50 + 5
+
+
+def test_stepping_also_stops_where_something_else_falls_due():
+    pacer, world, wall, _ = make(1.0)
+    world.tick()
+    pacer.published('clock', 0.0)
+    world.other_due = 0.011  # the camera: 5.5 steps away, due at step 6 with half a step slack
+    wall.now += 0.02
+    world.tick()
+    assert world.chunks[:3] == [2, 2, 1], 'the chunk ends at step 5, the camera within reach'
+    # Free-running too, where /clock is held back by wall time and does not end the chunks.
+    pacer, world, wall, _ = make(0.0, step_cost=1e-5)
+    world.other_due = 0.1
+    world.tick()
+    assert 50 in [sum(world.chunks[:i]) for i in range(len(world.chunks))]
+
+
+def test_free_running_steps_for_its_budget_and_holds_streams_to_their_wall_rate():
+    pacer, world, wall, _ = make(0.0, step_cost=1e-5)
+    start = wall.now
+    world.tick()
+    # 5 ms of stepping at 10 us a step: 500 steps, a whole second of simulation time.
+    assert wall.now - start == pytest.approx(pacing.STEP_BUDGET, abs=1e-4)
+    assert world.steps == pytest.approx(500, abs=10)
+    # In simulation time /clock would have gone out 250 times; in 5 ms of wall time it goes
+    # out twice (4 ms, 400 steps, apart), odometry once (every 20 ms). The first chunk is one
+    # step: every stream was due at once.
+    assert world.published['clock'] == [1, 401] and world.published['odom'] == [1]
+
+
+def test_free_running_learns_what_a_step_costs():
+    pacer, world, wall, _ = make(0.0, step_cost=4e-5)
+    for _ in range(5):
+        world.tick()
+    assert pacer.step_wall_time == pytest.approx(4e-5, rel=0.05)
+    # Knowing it, one tick takes about its budget and no more.
+    start = wall.now
+    world.tick()
+    assert wall.now - start == pytest.approx(pacing.STEP_BUDGET, rel=0.1)
+
+
+def test_tick_periods_follow_the_executor_turn():
+    pacer, world, wall, cpu = make(1.0)
+    assert pacer.first_tick_period == pacing.REAL_TIME_PERIOD
+    assert pacer.tick_period_ns(paused=False) == 2_000_000
+    assert pacer.tick_period_ns(paused=True) == 20_000_000
+
+    def turn(seconds):
+        """One tick, then an executor turn of this many CPU seconds, then the next tick."""
+        pacer.start_tick()
+        pacer.end_tick()
+        cpu.now += seconds
+        pacer.start_tick()
+    for _ in range(200):
+        turn(0.003)  # 3 ms between ticks: ticks every 5 turns, 15 ms
+    assert pacer.executor_turn == pytest.approx(0.003)
+    assert pacer.tick_period_ns(paused=False) == 15_000_000
+    turn(0.5)  # a slow service call is not overhead: the estimate barely moves
+    assert pacer.executor_turn < 0.0032
+    for _ in range(200):
+        turn(0.010)
+    assert pacer.tick_period_ns(paused=False) == 20_000_000, 'at most 20 ms'
+
+    free, *_ = make(0.0)
+    assert free.first_tick_period == 0.0 and free.tick_period_ns(paused=False) == 0
+    assert free.tick_period_ns(paused=True) == 20_000_000
+
+
+def test_a_stream_is_due_within_half_a_step_and_after_a_reset_at_once():
+    pacer, world, wall, _ = make(1.0)
+    assert pacer.take_due(0.0) == ['clock', 'odom']
+    assert pacer.take_due(0.0) == []
+    # Three steps of 0.002 s add up to a little less than 0.006: still the same step.
+    assert 3 * TIMESTEP < 0.006 + 1e-12
+    pacer.published('clock', 0.002)
+    assert pacer.take_due(0.002 + 0.002 + 0.002 - 1e-9) == ['clock']
+    pacer.take_due(1.0)
+    assert pacer.take_due(0.0) == [], 'simulation time went back; nothing is due'
+    pacer.restart(0.0, ['odom'])
+    assert pacer.take_due(0.0) == ['odom']
+
+
+def test_with_nothing_due_a_chunk_takes_every_step_it_may():
+    pacer = Pacer(timestep=TIMESTEP, real_time_factor=1.0, periods={})
+    assert pacer.steps_to_next_due(0.0, limit=7) == 7
+    assert pacer.take_due(0.0) == []
