@@ -20,7 +20,7 @@ from rclpy.action import ActionClient
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.signals import SignalHandlerOptions
-from rclpy.utilities import remove_ros_args
+from service_tutorial.client_main import program_arguments
 from service_tutorial.model_services import response_text
 from service_tutorial.robot_turning_action_server import MAX_ANGLE
 from service_tutorial.robot_turning_client import ask_turning_request, MAX_ANGULAR_VEL
@@ -192,7 +192,7 @@ def parse_arguments(argv):
 
 def main(args=None):
     """Ask for one turn, follow it, print the result; exit status 0 when it succeeded."""
-    options = parse_arguments(remove_ros_args(sys.argv if args is None else args)[1:])
+    options = parse_arguments(program_arguments(args))
     goal = options.goal
     if goal is None:
         try:

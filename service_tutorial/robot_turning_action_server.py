@@ -19,13 +19,12 @@ import math
 from geometry_msgs.msg import Twist
 from nav_msgs.msg import Odometry
 from rcl_interfaces.msg import FloatingPointRange, ParameterDescriptor
-import rclpy
 from rclpy.action import ActionServer, CancelResponse, GoalResponse
 from rclpy.duration import Duration
-from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
 from rclpy.task import Future
-from service_tutorial.model_services import yaw_of
+from service_tutorial.client_main import spin_node
+from service_tutorial.conversions import yaw_of
 from srv_interfaces.action import TurnRobot
 
 # pi / 2: the fastest turn the lesson allows, in rad/s.
@@ -187,7 +186,7 @@ class RobotTurningActionServer(Node):
 
     def odom_callback(self, msg):
         """Follow the robot's heading and steer (or settle) the turn under way."""
-        yaw = yaw_of(msg.pose.pose)
+        yaw = yaw_of(msg.pose.pose.orientation)
         if self.heading is None:
             self.heading = yaw
         else:
@@ -277,17 +276,7 @@ class RobotTurningActionServer(Node):
 
 def main(args=None):
     """Run the turning action server until Ctrl-C."""
-    rclpy.init(args=args)
-    node = None
-    try:
-        node = RobotTurningActionServer()
-        rclpy.spin(node)
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    finally:
-        if node is not None:
-            node.destroy_node()
-        rclpy.try_shutdown()
+    return spin_node(RobotTurningActionServer, args=args)
 
 
 if __name__ == '__main__':

@@ -179,7 +179,7 @@ class HeadingFollower:
         self.node = node
         self.state_client = node.create_client(
             GetModelState, model_services.GET_MODEL_STATE_SERVICE)
-        self.last = model_services.yaw_of(robot_state(node, self.state_client).pose)
+        self.last = yaw_of(robot_state(node, self.state_client).pose.orientation)
         self.turned = 0.0
 
     def follow(self, event, timeout, what, *, until_at_rest=True):
@@ -190,7 +190,7 @@ class HeadingFollower:
         while True:
             event.wait(HEADING_SAMPLE_PERIOD)
             state = robot_state(self.node, self.state_client)
-            heading = model_services.yaw_of(state.pose)
+            heading = yaw_of(state.pose.orientation)
             self.turned += math.remainder(heading - self.last, math.tau)
             self.last = heading
             if event.is_set() and (not until_at_rest or abs(state.twist.angular.z) < AT_REST):

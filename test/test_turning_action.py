@@ -12,7 +12,8 @@ from rcl_interfaces.msg import Parameter as ParameterMsg, ParameterType, Paramet
 from rcl_interfaces.srv import DescribeParameters, SetParameters
 from rclpy.action import ActionClient
 from rclpy.parameter import Parameter
-from service_tutorial.model_services import call, yaw_of
+from service_tutorial.conversions import seconds_of, yaw_of
+from service_tutorial.model_services import call
 from service_tutorial.mujoco_world import MujocoWorld
 from service_tutorial.robot_turning_action_server import RobotTurningActionServer
 from srv_interfaces.action import TurnRobot
@@ -24,10 +25,6 @@ pytestmark = pytest.mark.ros
 TURN_TIMEOUT = 60.0
 
 
-def seconds(stamp):
-    return stamp.sec + stamp.nanosec * 1e-9
-
-
 class GroundTruth:
     """Tinybot's heading from /mujoco/get_model_state, summed in small steps to unwrap it."""
 
@@ -35,18 +32,18 @@ class GroundTruth:
         self.action_world = action_world
         self.samples = []  # (simulation time, yaw rate) of every sample taken
         state = action_world.state()
-        self.last = yaw_of(state.pose)
+        self.last = yaw_of(state.pose.orientation)
         self.turned = 0.0
-        self.time = seconds(state.header.stamp)
+        self.time = seconds_of(state.header.stamp)
         self.yaw_rate = state.twist.angular.z
 
     def sample(self):
         """Read the state once more; return it (always true, to sample inside wait_for)."""
         state = self.action_world.state()
-        heading = yaw_of(state.pose)
+        heading = yaw_of(state.pose.orientation)
         self.turned += math.remainder(heading - self.last, math.tau)
         self.last = heading
-        self.time = seconds(state.header.stamp)
+        self.time = seconds_of(state.header.stamp)
         self.yaw_rate = state.twist.angular.z
         self.samples.append((self.time, self.yaw_rate))
         return state
@@ -174,7 +171,7 @@ def test_a_cancel_stops_tinybot_at_once_and_returns_what_was_turned(action_world
     canceled_at = []
 
     def cancel_callback(goal_handle):
-        canceled_at.append(seconds(server.get_clock().now().to_msg()))
+        canceled_at.append(seconds_of(server.get_clock().now().to_msg()))
         return server.cancel_callback(goal_handle)
 
     server.turn_robot_server.register_cancel_callback(cancel_callback)
