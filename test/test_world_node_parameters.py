@@ -120,7 +120,7 @@ class World:
         assert self.ros.wait_for(lambda: self.now() >= end, timeout=timeout), \
             f'simulation time did not reach {end:.3f} s'
 
-    def pace(self, wall_seconds=2.0):
+    def pace(self, wall_seconds=1.5):
         """Measure simulated seconds per wall second over the next wall_seconds on /clock."""
         start = len(self.clock)
         assert self.ros.wait_for(lambda: len(self.clock) > start)
