@@ -27,6 +27,8 @@ setup(
             'mujoco_world = service_tutorial.mujoco_world:main',
             'robot_turning_server = service_tutorial.robot_turning_server:main',
             'robot_turning_client = service_tutorial.robot_turning_client:main',
+            'robot_turning_action_server = service_tutorial.robot_turning_action_server:main',
+            'robot_turning_action_client = service_tutorial.robot_turning_action_client:main',
             'spawn_model_client = service_tutorial.spawn_model_client:main',
             'delete_model_client = service_tutorial.delete_model_client:main',
             'reset_simulation_client = service_tutorial.reset_simulation_client:main',

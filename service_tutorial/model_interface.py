@@ -14,14 +14,12 @@ from geometry_msgs.msg import Twist
 from nav_msgs.msg import Odometry
 from sensor_msgs.msg import JointState
 from service_tutorial.conversions import fill_pose_msg, fill_time_msg, fill_twist_msg
+from service_tutorial.pacing import JOINT_STATES_STREAM, ODOMETRY_STREAM
 from service_tutorial.ros_names import plugin_topic
 from service_tutorial.sim.plugins.diff_drive import MAX_WHEEL_RIM_SPEED
 from service_tutorial.sim.validation import finite_number
 from service_tutorial.sim.validation import WorldError
-
-# The node's publication streams the plugins' topics go out on.
-ODOMETRY_STREAM = 'odom'
-JOINT_STATES_STREAM = 'joint_states'
+from service_tutorial.tf_interface import OdomTfInterface
 
 
 class DriveInterface:
@@ -121,7 +119,7 @@ class DriveInterface:
 
 
 # Every kind of plugin that has a ROS face, in the order their topics are made.
-PLUGIN_INTERFACES = (DriveInterface,)
+PLUGIN_INTERFACES = (DriveInterface, OdomTfInterface)
 
 
 class ModelInterface:

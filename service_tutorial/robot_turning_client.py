@@ -14,10 +14,9 @@ import rclpy
 from rclpy.node import Node
 from service_tutorial.client_main import program_arguments, run_node
 from service_tutorial.model_services import response_text
+from service_tutorial.robot_turning_server import MAX_ANGULAR_VEL
 from srv_interfaces.srv import ControlTurningMessage
 
-# pi / 2: the fastest turn the lesson allows, in rad/s.
-MAX_ANGULAR_VEL = 1.5707
 MAX_UINT32 = 2**32 - 1
 DURATION_PROMPT = '> Type turning time duration: '
 VELOCITY_PROMPT = '> Type turning angular velocity: '
@@ -46,13 +45,14 @@ def parse_turning_request(duration_text, velocity_text, *, max_angular_vel=MAX_A
     return int(duration), velocity
 
 
-def ask_turning_request(logger, *, read=input):
-    """Prompt for a duration and a velocity until both are valid; EOFError if input ends."""
+def ask_turning_request(logger, *, read=input, prompts=(DURATION_PROMPT, VELOCITY_PROMPT),
+                        parse=parse_turning_request):
+    """Prompt for two values (duration, velocity) until parse takes them; EOFError at the end."""
     while True:
-        duration_text = read(DURATION_PROMPT)
-        velocity_text = read(VELOCITY_PROMPT)
+        first_text = read(prompts[0])
+        velocity_text = read(prompts[1])
         try:
-            return parse_turning_request(duration_text, velocity_text)
+            return parse(first_text, velocity_text)
         except TurningInputError as error:
             logger.error(str(error))
 
