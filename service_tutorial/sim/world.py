@@ -174,8 +174,7 @@ class World:
         """
         Add a robot from URDF text and return its Model; a refusal leaves the world unchanged.
 
-        What the user should know about how the robot was built (meshes left out, plugins
-        not simulated here) is in model.description and logged once.
+        The description's notes (meshes left out, plugins not simulated here) are logged once.
         """
         validation.check_model_name(name)
         if name in self._models:
@@ -403,12 +402,7 @@ class World:
     # ---------------------------------------------------------------- diff drive
 
     def command_velocity(self, name, linear_x, angular_z):
-        """
-        Command a drive robot's body twist; it lapses after cmd_vel_timeout seconds.
-
-        Return the (linear_x, angular_z) carried out: the drive's command_velocity() scales a
-        command that would turn a wheel rim faster than MAX_WHEEL_RIM_SPEED down to that speed.
-        """
+        """Command a drive robot's body twist; return the twist its drive carries out."""
         return self._diff_drive(name).command_velocity(linear_x, angular_z)
 
     def odometry(self, name):

@@ -142,8 +142,6 @@ def _inertia_about_axis(body, axis):
     return float(axis @ tensor @ axis + body.mass * (offset @ offset - (offset @ axis) ** 2))
 
 
-
-
 class DiffDrive(Plugin):
     """
     A robot's drive at run time: wheel set points, command timeout, odometry.

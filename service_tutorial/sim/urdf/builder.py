@@ -357,8 +357,8 @@ class _SpecBuilder:
                             2.0 * self._timestep)
         damping_ratio = 1.0
         if settings.kd is not None:
-            damping_ratio = max(1.0, settings.kd / (2.0 * math.sqrt(settings.kp
-                                                                      * self._robot_mass)))
+            critical = 2.0 * math.sqrt(settings.kp * self._robot_mass)
+            damping_ratio = max(1.0, settings.kd / critical)
         return [time_constant, damping_ratio]
 
     def _keep_links_apart(self):

@@ -147,7 +147,8 @@ def read_link_settings(root):
             if element is None:
                 continue
             text = element.get('value') if element.get('value') is not None else element.text
-            found[tag] = _link_value(text or '', kind, f'gazebo <{tag}> of link {quoted(reference)}')
+            what = f'gazebo <{tag}> of link {quoted(reference)}'
+            found[tag] = _link_value(text or '', kind, what)
     settings = {}
     for link, found in values.items():
         if not found:

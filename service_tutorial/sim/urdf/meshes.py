@@ -11,6 +11,7 @@ or unreadable file, relative path without a base directory) is left out, as Gaze
 
 import io
 import os
+import warnings
 
 import mujoco
 import numpy as np
@@ -65,7 +66,7 @@ class MeshLoader:
                                  'collides only with solid shapes: that collision is left out')
             return None
         mj_mesh = self._spec.add_mesh(name=f'mesh{len(self.files)}')
-        mj_mesh.uservert = vertices.astype(np.float32).ravel()
+        mj_mesh.uservert = vertices.ravel()
         mj_mesh.userface = faces.ravel()
         mj_mesh.scale = scale
         # Open surfaces are common in meshes made for looks; bodies carry their URDF inertia.
@@ -121,7 +122,7 @@ def resolve_mesh_path(filename, base_dir, package_resolver):
 
 
 def read_mesh(path):
-    """Return (vertices (n, 3) float, faces (m, 3) int32) of an allowed mesh file."""
+    """Return (vertices, faces) of an allowed mesh file, as decode_mesh() does."""
     try:
         with open(path, 'rb') as mesh_file:
             data = mesh_file.read(MAX_MESH_BYTES + 1)
@@ -133,15 +134,24 @@ def read_mesh(path):
 
 
 def decode_mesh(data, file_type):
-    """Return (vertices, faces) of mesh file contents; file_type is 'stl', 'dae' or 'obj'."""
+    """
+    Return (vertices (n, 3) float32, faces (m, 3) int32) of mesh file contents.
+
+    file_type is 'stl', 'dae' or 'obj'. Raise MeshMissing if they hold no usable surface.
+    """
     if not data.strip():
         raise MeshMissing('the file is empty')
     meter = collada_meter(data) if file_type == 'dae' else 1.0
-    import trimesh  # here, not at the top: importing it takes over a second
+    # Imported here: a robot without meshes needs none of it. (yourdfpy imports trimesh
+    # anyway; trimesh imports pycollada only for the first Collada file.)
+    import trimesh
     try:
         # A file object without a resolver: trimesh reads nothing but these bytes.
-        loaded = trimesh.load(io.BytesIO(data), file_type=file_type, force='mesh')
-        vertices = np.array(loaded.vertices, dtype=float) * meter
+        with warnings.catch_warnings(), np.errstate(all='ignore'):
+            warnings.simplefilter('ignore')
+            loaded = trimesh.load(io.BytesIO(data), file_type=file_type, force='mesh')
+            # MuJoCo keeps vertices in single precision.
+            vertices = (np.array(loaded.vertices, dtype=float) * meter).astype(np.float32)
         faces = np.array(loaded.faces, dtype=np.int32)
     except Exception as error:
         reason = str(error).splitlines()[0] if str(error) else type(error).__name__
@@ -151,7 +161,7 @@ def decode_mesh(data, file_type):
         raise MeshMissing(f'not a readable {file_type.upper()} file (no triangles in it)')
     if not np.all(np.isfinite(vertices)):
         raise MeshMissing('its vertices hold NaN or infinity')
-    triangles = vertices[faces]
+    triangles = vertices[faces].astype(float)
     area = np.linalg.norm(np.cross(triangles[:, 1] - triangles[:, 0],
                                    triangles[:, 2] - triangles[:, 0]), axis=1).sum() / 2.0
     if not area > 1e-12:
