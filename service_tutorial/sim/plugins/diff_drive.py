@@ -170,6 +170,7 @@ class DiffDrive(Plugin):
         self.targets = np.zeros(len(self._joints))
         self.ramp_end = np.full(len(self._joints), math.inf)
         self.expiry = math.inf
+        self.commanded_at = None  # simulation time of the command in force, if there is one
         self.encoder = EncoderOdometry(pairs[0][2], pairs[0][3] / 2.0)
         self.origin_position = np.zeros(3)
         self.origin_orientation = np.array(frames.IDENTITY_QUATERNION)
@@ -226,10 +227,15 @@ class DiffDrive(Plugin):
             linear_x, angular_z, rims = linear_x * scale, angular_z * scale, rims * scale
         self._update_encoder()
         self._set_wheel_targets(rims / self._radii)
-        timeout = self.world.cmd_vel_timeout
-        self.expiry = self.world.data.time + timeout if timeout > 0.0 else math.inf
+        self.commanded_at = self.world.data.time
+        self.set_timeout(self.world.cmd_vel_timeout)
         self.world.schedule_events()
         return linear_x, angular_z
+
+    def set_timeout(self, timeout):
+        """Let the command in force lapse timeout seconds after it came (0: never)."""
+        if self.commanded_at is not None:
+            self.expiry = self.commanded_at + timeout if timeout > 0.0 else math.inf
 
     def _set_wheel_targets(self, speeds):
         """
@@ -264,6 +270,7 @@ class DiffDrive(Plugin):
             self._update_encoder()
             self._set_wheel_targets(np.zeros(len(self.targets)))
             self.expiry = math.inf
+            self.commanded_at = None
 
     def reset(self):
         """Stop the wheels at once, drop the command and start odometry where the robot is."""
@@ -271,6 +278,7 @@ class DiffDrive(Plugin):
         self.targets[:] = 0.0
         self.ramp_end[:] = math.inf
         self.expiry = math.inf
+        self.commanded_at = None
         data.act[self._act_adr] = 0.0
         data.ctrl[self._actuator_ids] = 0.0
         qpos = data.qpos
