@@ -169,11 +169,7 @@ class World:
 
     def spawn_urdf(self, name, urdf_xml, *, position=(0.0, 0.0, 0.0),
                    orientation=frames.IDENTITY_QUATERNION, reference_frame='', base_dir=None):
-        """
-        Add a robot from URDF text and return its Model; a refusal leaves the world unchanged.
-
-        The description's notes (meshes left out, plugins not simulated here) are logged once.
-        """
+        """Add a URDF robot, log its notes and return its Model; a refusal changes nothing."""
         validation.check_model_name(name)
         if name in self._models:
             raise WorldError(f'a model named {quoted(name)} already exists')
