@@ -5,7 +5,8 @@ A plugin module is named in KINDS below, by the Gazebo plugin it stands in for, 
 PLUGIN, a Plugin subclass. Loading a URDF calls PLUGIN.configure() on the block and
 PLUGIN.build() on the robot's spec; spawning the robot makes one PLUGIN(config, block) per
 block, and the world's step calls it through the methods of Plugin. Adding a kind touches this
-table and a new module, not the world.
+table and a new module, not the world. drive_config.py is no kind: it reads the parameters of
+the drives.
 """
 
 from dataclasses import dataclass
@@ -15,6 +16,7 @@ import math
 # Gazebo plugin name (as it appears in the <plugin filename>) -> module that stands in for it.
 KINDS = {
     'gazebo_ros_diff_drive': 'service_tutorial.sim.plugins.diff_drive',
+    'gazebo_ros_skid_steer_drive': 'service_tutorial.sim.plugins.skid_steer',
 }
 
 
@@ -69,6 +71,8 @@ class Plugin:
     # Whether a robot may carry more than one plugin of this kind, and its name in refusals.
     single = True
     title = 'plugin'
+    # A drive takes velocity commands: command_velocity(), odometry(); a robot has one.
+    is_drive = False
 
     def __init__(self, config, block):
         """Keep the configuration parsed from the plugin's block, and the block itself."""

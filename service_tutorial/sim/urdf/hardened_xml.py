@@ -30,25 +30,34 @@ def parse_model_xml(model_xml):
     if b'\x00' in data:
         # UTF-16 or UTF-32 text would slip past the byte scan for a DOCTYPE below.
         raise UrdfError('model_xml must be UTF-8 text')
-    # A DTD is the only way to declare entities; refusing it outright means nothing is
-    # ever fetched or expanded, whatever the parser would have done.
-    if b'<!DOCTYPE' in data or b'<!ENTITY' in data:
-        raise UrdfError('model_xml contains a DOCTYPE or ENTITY declaration, which is refused')
-    parser = etree.XMLParser(
-        resolve_entities=False, no_network=True, load_dtd=False, dtd_validation=False,
-        huge_tree=False, remove_comments=True, remove_pis=True)
-    try:
-        root = etree.fromstring(data, parser)
-    except (etree.XMLSyntaxError, ValueError) as error:
-        raise UrdfError(f'model_xml does not parse as XML: {error}') from None
-    if root.getroottree().docinfo.doctype:
-        raise UrdfError('model_xml contains a DOCTYPE declaration, which is refused')
+    root = parse_xml(data, 'model_xml')
     tag = etree.QName(root).localname
     if tag != 'robot' or etree.QName(root).namespace:
         raise UrdfError(f'model_xml is not URDF: root element is <{tag}>')
     for element in root.iter():
         if isinstance(element.tag, str) and etree.QName(element).namespace == XACRO_NAMESPACE:
             raise UrdfError('model_xml contains xacro macros; run xacro on it first')
+    return root
+
+
+def parse_xml(data, what, *, huge_tree=False):
+    """
+    Parse XML bytes from an untrusted source and return the root element.
+
+    A DTD is the only way to declare entities; refusing it outright means nothing is ever
+    fetched or expanded, whatever a later parser of the same bytes would have done.
+    """
+    if b'<!DOCTYPE' in data or b'<!ENTITY' in data:
+        raise UrdfError(f'{what} contains a DOCTYPE or ENTITY declaration, which is refused')
+    parser = etree.XMLParser(
+        resolve_entities=False, no_network=True, load_dtd=False, dtd_validation=False,
+        huge_tree=huge_tree, remove_comments=True, remove_pis=True)
+    try:
+        root = etree.fromstring(data, parser)
+    except (etree.XMLSyntaxError, ValueError) as error:
+        raise UrdfError(f'{what} does not parse as XML: {error}') from None
+    if root.getroottree().docinfo.doctype:
+        raise UrdfError(f'{what} contains a DOCTYPE declaration, which is refused')
     return root
 
 
