@@ -249,10 +249,8 @@ class MujocoWorld(Node):
             raise
         if self.viewer is not None:
             self._open_viewer()
-        left_out = left_out_of(model.description)
-        if left_out:
-            self.get_logger().warning(f'spawned model {name!r}: {left_out}')
-        return left_out
+        # The world's log has already named each of them, with the reason.
+        return left_out_of(model.description)
 
     def _forget_model(self, name):
         """Destroy the ROS interface of a model that left the world."""
