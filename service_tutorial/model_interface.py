@@ -16,11 +16,23 @@ from sensor_msgs.msg import JointState
 from service_tutorial.conversions import fill_pose_msg, fill_time_msg, fill_twist_msg
 from service_tutorial.pacing import JOINT_STATES_STREAM, ODOMETRY_STREAM
 from service_tutorial.ros_names import plugin_topic
-from service_tutorial.sim.plugins.diff_drive import MAX_WHEEL_RIM_SPEED
+from service_tutorial.sim.plugins.diff_drive import DiffDrive, MAX_WHEEL_RIM_SPEED
 from service_tutorial.sim.plugins.drive_config import is_ros1_block
 from service_tutorial.sim.validation import finite_number
 from service_tutorial.sim.validation import WorldError
 from service_tutorial.tf_interface import OdomTfInterface
+
+
+def publishes_joint_states(drive):
+    """
+    Tell whether a drive's face publishes joint_states.
+
+    A ROS 1 block says so (publishWheelJointState). ROS 2's diff drive has no such switch,
+    Gazebo leaving joint states to another plugin; here it publishes them, as the world always
+    has, for robot_state_publisher.
+    """
+    ros2_diff_drive = type(drive) is DiffDrive and not is_ros1_block(drive.block)
+    return drive.config.publish_wheel_joint_state or ros2_diff_drive
 
 
 class DriveInterface:
@@ -50,10 +62,7 @@ class DriveInterface:
         if config.publish_odom:
             self.odom_pub = node.create_publisher(Odometry, odom_topic, 10)
             self._publishers[ODOMETRY_STREAM] = self.publish_odometry
-        # A ROS 1 block says whether (publishWheelJointState); ROS 2's diff drive has no such
-        # switch, Gazebo leaving joint states to another plugin: here it publishes them, as the
-        # world always has, for robot_state_publisher.
-        if config.publish_wheel_joint_state or not is_ros1_block(block):
+        if publishes_joint_states(plugin):
             self.joint_states_pub = node.create_publisher(JointState, joint_states_topic, 10)
             self._publishers[JOINT_STATES_STREAM] = self.publish_joint_states
         # Filled in and published again every time: publish() copies the message.

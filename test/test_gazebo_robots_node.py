@@ -232,31 +232,34 @@ def test_plugin_namespaces_and_remaps_put_the_topics_where_gazebo_would(real_tim
             ('bot', ros2_drive, pose_at(2, 0), ''),
             ('fleet_bot', ros2_drive, pose_at(2, 2), 'fleet/one'),
             ('r1', read_test_model('ros_ros1_namespaced_drive.urdf'), pose_at(-2, -1), ''),
-            ('quiet', quiet, pose_at(-2, 2), 'quiet')]:
+            ('quiet', quiet, pose_at(-2, 2), 'quiet'),
+            ('skid', read_test_model('skidbot_ros1.urdf'), pose_at(0, -3), '')]:
         response = world.spawn(name, xml, pose, namespace=namespace)
         assert response.success, response.status_message
 
     topics = node_topics(node)
     assert {'/bot/cmd', '/bot/odometry/wheels', '/fleet/one/cmd', '/fleet/one/odometry/wheels',
-            '/r1/drive/cmd_vel', '/r1_odom', '/r1/joint_states', '/quiet/cmd'} <= topics
+            '/r1/drive/cmd_vel', '/r1_odom', '/r1/joint_states', '/quiet/cmd',
+            '/skidbot/cmd_vel', '/skidbot/odom'} <= topics
     misplaced = {'/bot/cmd_vel', '/bot/odom', '/fleet/one/bot/cmd', '/quiet/odometry/wheels',
-                 '/r1/cmd_vel', '/r1/odom'} & topics
+                 '/r1/cmd_vel', '/r1/odom', '/skidbot/joint_states'} & topics
     assert not misplaced
     odometry = {topic: ros.subscribe(Odometry, topic)
-                for topic in ('/bot/odometry/wheels', '/fleet/one/odometry/wheels', '/r1_odom')}
+                for topic in ('/bot/odometry/wheels', '/fleet/one/odometry/wheels', '/r1_odom',
+                              '/skidbot/odom')}
     joint_states = ros.subscribe(JointState, '/r1/joint_states')
     assert ros.wait_for(lambda: all(odometry.values()) and joint_states)
     names = world.models()
     before = {name: world.state(name).pose for name in names}
 
     drive(world, ros, {'/bot/cmd': twist(linear_x=0.2), '/r1/drive/cmd_vel': twist(0.2),
-                       '/quiet/cmd': twist(0.2)}, 1.0)
+                       '/quiet/cmd': twist(0.2), '/skidbot/cmd_vel': twist(0.2)}, 1.0)
 
     moved = {name: math.hypot(world.state(name).pose.position.x - before[name].position.x,
                               world.state(name).pose.position.y - before[name].position.y)
              for name in names}
     print(f'\nmoved on their own cmd topics, 0.2 m/s for 1 s: {moved}')
-    for name in ('bot', 'r1', 'quiet'):
+    for name in ('bot', 'r1', 'quiet', 'skid'):
         assert moved[name] == pytest.approx(0.2, rel=0.1), name
     assert moved['fleet_bot'] < 0.005 and moved['tinybot'] < 0.005
     wheels, r1_odometry = odometry['/bot/odometry/wheels'][-1], odometry['/r1_odom'][-1]
@@ -264,9 +267,12 @@ def test_plugin_namespaces_and_remaps_put_the_topics_where_gazebo_would(real_tim
     assert r1_odometry.header.frame_id == 'r1_odom'
     assert r1_odometry.pose.pose.position.x == pytest.approx(0.2, rel=0.1)
     assert {'wheel_left_joint', 'wheel_right_joint'} <= set(joint_states[-1].name)
-    covariance = node.models['bot'].plugins[0].drive.config.covariance
-    assert [wheels.pose.covariance[7 * i] for i in range(6)] == list(covariance[:6])
-    assert [wheels.twist.covariance[7 * i] for i in range(6)] == list(covariance[6:])
+    # <covariance_x|y|yaw> on the diagonals of pose and twist; 1e12 for what is not measured.
+    for odometry_msg, (x, y, yaw) in ((wheels, (0.0002, 0.0003, 0.004)),
+                                      (odometry['/skidbot/odom'][-1], (0.0001, 0.0001, 0.01))):
+        for matrix in (odometry_msg.pose.covariance, odometry_msg.twist.covariance):
+            assert [matrix[7 * i] for i in range(6)] == [x, y, 1e12, 1e12, 1e12, yaw]
+            assert sum(abs(value) for value in matrix) == pytest.approx(x + y + yaw + 3e12)
 
     assert world.delete('bot').success
     assert not {'/bot/cmd', '/bot/odometry/wheels'} & node_topics(node)
