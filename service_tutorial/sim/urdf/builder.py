@@ -17,6 +17,7 @@ from service_tutorial.sim import frames
 from service_tutorial.sim import plugins
 from service_tutorial.sim.urdf.gazebo import read_link_friction
 from service_tutorial.sim.urdf.gazebo import read_plugin_blocks
+from service_tutorial.sim.urdf.gazebo import read_sensor_plugin_blocks
 from service_tutorial.sim.urdf.hardened_xml import check_structure
 from service_tutorial.sim.urdf.hardened_xml import parse_model_xml
 from service_tutorial.sim.urdf.hardened_xml import parse_numbers
@@ -91,7 +92,8 @@ def load_urdf(model_xml, *, base_dir=None, package_resolver=None, timestep=0.002
         raise UrdfError(f'model_xml is not valid URDF: {urdf.errors[0].msg}')
     builder = _SpecBuilder(urdf.robot, base_dir, package_resolver, read_link_friction(root))
     description = builder.build()
-    setups = _plugin_setups(read_plugin_blocks(root), urdf.robot)
+    setups = _plugin_setups(read_plugin_blocks(root) + read_sensor_plugin_blocks(root),
+                            urdf.robot)
     for setup in setups:
         plugins.plugin_class(setup.kind).build(description.spec, setup.config, timestep)
     return dataclasses.replace(
