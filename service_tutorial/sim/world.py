@@ -22,6 +22,7 @@ from service_tutorial.sim.model import Model
 from service_tutorial.sim.plugins.diff_drive import DiffDrive
 from service_tutorial.sim.recovery import Recovery
 from service_tutorial.sim.recovery import take_steps
+from service_tutorial.sim.scenery import Scenery
 from service_tutorial.sim.urdf.builder import load_urdf
 from service_tutorial.sim.urdf.hardened_xml import MAX_MODEL_XML_BYTES
 from service_tutorial.sim.urdf.hardened_xml import UrdfError
@@ -70,12 +71,13 @@ class World:
     """
 
     def __init__(self, *, timestep=0.002, gravity=(0.0, 0.0, -9.81), cmd_vel_timeout=0.5,
-                 package_resolver=None):
+                 package_resolver=None, scenery=None):
         """
-        Create an empty world.
+        Create a world without models.
 
         package_resolver maps a package name to its share folder, for package:// meshes;
-        without one, such meshes are refused.
+        without one, such meshes are refused. scenery is the path of a file of static
+        obstacles (see scenery.py); without one the ground is bare.
         """
         timestep = validation.finite_number(timestep, 'timestep')
         if timestep <= 0.0:
@@ -93,7 +95,8 @@ class World:
         self._models = {}
         self._next_event = math.inf
         self._kinematics_fresh = False
-        self._spec = scene.make_scene(timestep, gravity)
+        self._scenery = Scenery(scenery, package_resolver=package_resolver) if scenery else None
+        self._spec = scene.make_scene(timestep, gravity, self._scenery)
         self._model = self._spec.compile()
         self._data = mujoco.MjData(self._model)
         self._recovery = Recovery(self)
@@ -234,7 +237,7 @@ class World:
         holds only the live robots; their integration state is carried over, so the
         simulation goes on exactly as if the spec had been edited in place.
         """
-        spec = scene.make_scene(self._timestep, self._gravity)
+        spec = scene.make_scene(self._timestep, self._gravity, self._scenery)
         for model in models.values():
             model.attach(spec)
         mj_model = spec.compile()
