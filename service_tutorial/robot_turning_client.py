@@ -46,13 +46,14 @@ def parse_turning_request(duration_text, velocity_text, *, max_angular_vel=MAX_A
     return int(duration), velocity
 
 
-def ask_turning_request(logger, *, read=input):
-    """Prompt for a duration and a velocity until both are valid; EOFError if input ends."""
+def ask_turning_request(logger, *, read=input, prompts=(DURATION_PROMPT, VELOCITY_PROMPT),
+                        parse=parse_turning_request):
+    """Prompt for two values (duration, velocity) until parse takes them; EOFError at the end."""
     while True:
-        duration_text = read(DURATION_PROMPT)
-        velocity_text = read(VELOCITY_PROMPT)
+        first_text = read(prompts[0])
+        velocity_text = read(prompts[1])
         try:
-            return parse_turning_request(duration_text, velocity_text)
+            return parse(first_text, velocity_text)
         except TurningInputError as error:
             logger.error(str(error))
 

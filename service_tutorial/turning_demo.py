@@ -1,11 +1,12 @@
 """
 The lesson from start to finish against a headless MuJoCo world: what scripts/demo runs.
 
-It starts mujoco_world and robot_turning_server (on the world's simulation time) as child
-processes, then walks through the lesson's services one step at a time, printing what each
-did: spawn R2-D2, turn tinybot through /control_robot_angle and measure how far it really
-turned, delete R2-D2, reset the simulation. The children are stopped at the end whatever
-happened; the exit status is 0 only if every step succeeded.
+It starts mujoco_world, robot_turning_server and robot_turning_action_server (on the world's
+simulation time) as child processes, then walks through the lesson's services one step at a
+time, printing what each did: spawn R2-D2, turn tinybot through /control_robot_angle and
+measure how far it really turned, turn it again through the turn_robot action and cancel a
+second action turn half way, delete R2-D2, reset the simulation. The children are stopped at
+the end whatever happened; the exit status is 0 only if every step succeeded.
 """
 
 import argparse
@@ -19,8 +20,10 @@ import tempfile
 import threading
 import time
 
+from action_msgs.msg import GoalStatus
 from ament_index_python.packages import get_package_prefix, PackageNotFoundError
 import rclpy
+from rclpy.action import ActionClient
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.signals import SignalHandlerOptions
@@ -29,6 +32,8 @@ from service_tutorial.client_main import program_arguments
 from service_tutorial.conversions import make_pose, seconds_of, yaw_of
 from service_tutorial.model_services import response_text
 from service_tutorial.recording import TurnRecorder
+from service_tutorial.robot_turning_action_client import STATUS_NAMES
+from srv_interfaces.action import TurnRobot
 from srv_interfaces.srv import ControlTurningMessage, DeleteModel, GetModelState, SpawnModel
 from std_srvs.srv import Empty
 
@@ -39,6 +44,7 @@ ROBOT = 'tinybot'
 CHILDREN = (
     ('mujoco_world', ['-p', 'gui:=false', '-p', 'use_sim_time:=true']),
     ('robot_turning_server', ['-p', 'use_sim_time:=true']),
+    ('robot_turning_action_server', ['-p', 'use_sim_time:=true']),
 )
 SERVICES = (
     (SpawnModel, model_services.SPAWN_MODEL_SERVICE),
@@ -56,6 +62,9 @@ HEADING_SAMPLE_PERIOD = 0.1
 AT_REST = 1e-3
 # Seconds a child gets to stop after SIGINT before it is killed.
 STOP_TIMEOUT = 5.0
+# The action steps: a quarter turn left, and a half turn canceled half way, in rad and rad/s.
+ACTION_TURN = (math.pi / 2, 0.5)
+CANCELED_TURN = (math.pi, 0.5)
 
 
 class DemoError(RuntimeError):
@@ -163,36 +172,53 @@ def spawn_r2d2(node):
                f'heading {math.degrees(yaw_of(state.pose.orientation)):.1f} deg'))
 
 
+class HeadingFollower:
+    """How far tinybot has turned since this was made, by ground truth sampled as it turns."""
+
+    def __init__(self, node):
+        self.node = node
+        self.state_client = node.create_client(
+            GetModelState, model_services.GET_MODEL_STATE_SERVICE)
+        self.last = yaw_of(robot_state(node, self.state_client).pose.orientation)
+        self.turned = 0.0
+
+    def follow(self, event, timeout, what, *, until_at_rest=True):
+        """Sample the heading until event is set (and tinybot has stopped); return the turn."""
+        deadline = time.monotonic() + timeout
+        # Sum the heading's changes: a heading alone is only known modulo 2 pi, a sum of
+        # small changes is not.
+        while True:
+            event.wait(HEADING_SAMPLE_PERIOD)
+            state = robot_state(self.node, self.state_client)
+            heading = yaw_of(state.pose.orientation)
+            self.turned += math.remainder(heading - self.last, math.tau)
+            self.last = heading
+            if event.is_set() and (not until_at_rest or abs(state.twist.angular.z) < AT_REST):
+                return self.turned
+            if time.monotonic() > deadline:
+                raise DemoError(f'waited {timeout:.0f} s in vain for {what}')
+
+    def destroy(self):
+        """Let go of the state service's client."""
+        self.node.destroy_client(self.state_client)
+
+
 def turn_robot(node, time_duration, angular_vel):
     """Ask /control_robot_angle for a turn and measure how far tinybot really turned."""
     turning_client = node.create_client(ControlTurningMessage, 'control_robot_angle')
-    state_client = node.create_client(GetModelState, model_services.GET_MODEL_STATE_SERVICE)
+    heading = HeadingFollower(node)
     try:
         request = ControlTurningMessage.Request()
         request.time_duration = time_duration
         request.angular_vel = angular_vel
-        last = yaw_of(robot_state(node, state_client).pose.orientation)
-        turned = 0.0
         future = turning_client.call_async(request)
         answered = threading.Event()
         future.add_done_callback(lambda _: answered.set())
-        deadline = time.monotonic() + time_duration + 10.0
-        # Sum the heading's changes until the answer has come and tinybot has stopped: a
-        # heading alone is only known modulo 2 pi, a sum of small changes is not.
-        while True:
-            answered.wait(HEADING_SAMPLE_PERIOD)
-            state = robot_state(node, state_client)
-            heading = yaw_of(state.pose.orientation)
-            turned += math.remainder(heading - last, math.tau)
-            last = heading
-            if answered.is_set() and abs(state.twist.angular.z) < AT_REST:
-                break
-            if time.monotonic() > deadline:
-                raise DemoError(f'{turning_client.service_name} did not answer, or tinybot '
-                                f'did not stop, within {time_duration + 10.0:.0f} s')
+        turned = heading.follow(answered, time_duration + 10.0, f'an answer from '
+                                f'{turning_client.service_name} and tinybot at rest')
     finally:
         node.destroy_client(turning_client)
-        node.destroy_client(state_client)
+        heading.destroy()
     response = future.result()
     say(indent(response_text(response)))
     if not response.success:
@@ -201,6 +227,74 @@ def turn_robot(node, time_duration, angular_vel):
     error = '' if commanded == 0.0 else f', {100.0 * (turned - commanded) / commanded:+.1f} %'
     say(indent(f'commanded {commanded:.3f} rad, tinybot turned {turned:.3f} rad{error}'))
     return turned
+
+
+def send_turn_goal(node, angle, angular_vel, *, cancel_at=None):
+    """
+    Turn tinybot through the turn_robot action and measure how far it really turned.
+
+    With cancel_at, the goal is canceled once the feedback says it has turned that far.
+    Return the goal's final status, its result, the feedback and the ground truth turn.
+    """
+    turning_client = ActionClient(node, TurnRobot, 'turn_robot')
+    heading = HeadingFollower(node)
+    feedback = []
+    reached = threading.Event()
+
+    def feedback_callback(feedback_msg):
+        feedback.append(feedback_msg.feedback)
+        if cancel_at is not None and abs(feedback_msg.feedback.angle_turned) >= cancel_at:
+            reached.set()
+
+    timeout = abs(angle) / angular_vel + 10.0
+    try:
+        if not turning_client.wait_for_server(timeout_sec=10.0):
+            raise DemoError('the turn_robot action server did not appear within 10 s')
+        goal_future = turning_client.send_goal_async(
+            TurnRobot.Goal(angle=angle, angular_vel=angular_vel),
+            feedback_callback=feedback_callback)
+        if not model_services.wait_for_future(node, goal_future, timeout=10.0):
+            raise DemoError('turn_robot did not answer the goal within 10 s')
+        goal_handle = goal_future.result()
+        if not goal_handle.accepted:
+            raise DemoError('the turning action server rejected the goal (its log says why)')
+        result_future = goal_handle.get_result_async()
+        ended = threading.Event()
+        result_future.add_done_callback(lambda _: ended.set())
+        if cancel_at is not None:
+            heading.follow(reached, timeout, f'feedback of {cancel_at:.3f} rad turned',
+                           until_at_rest=False)
+            goal_handle.cancel_goal_async()
+        turned = heading.follow(ended, timeout, 'the result of turn_robot and tinybot at rest')
+    finally:
+        turning_client.destroy()
+        heading.destroy()
+    response = result_future.result()
+    say(indent(f'status: {STATUS_NAMES.get(response.status, response.status)}\n'
+               f'{response_text(response.result)}'))
+    return response.status, response.result, feedback, turned
+
+
+def turn_by_action(node, angle, angular_vel):
+    """Turn tinybot by an angle through the action and compare with ground truth."""
+    _, result, feedback, turned = send_turn_goal(node, angle, angular_vel)
+    say(indent(f'{len(feedback)} feedback messages; asked for {angle:.3f} rad, tinybot turned '
+               f'{turned:.3f} rad, {100.0 * (turned - angle) / angle:+.1f} %'))
+    if not result.success:
+        raise DemoError(f'the turn by the action failed: {result.message}')
+
+
+def cancel_half_way(node, angle, angular_vel):
+    """Start a turn through the action, cancel it half way and show what was turned."""
+    half_way = abs(angle) / 2
+    status, result, feedback, turned = send_turn_goal(
+        node, angle, angular_vel, cancel_at=half_way)
+    canceled_at = next(report.angle_turned for report in feedback
+                       if abs(report.angle_turned) >= half_way)
+    say(indent(f'canceled at {canceled_at:.3f} rad by the feedback; the result says '
+               f'{result.angle_turned:.3f} rad, tinybot turned {turned:.3f} rad'))
+    if status != GoalStatus.STATUS_CANCELED:
+        raise DemoError(f'the turn was not canceled: {result.message}')
 
 
 def delete_r2d2(node):
@@ -226,6 +320,10 @@ def lesson_steps(options):
         ("spawn R2-D2 the lesson's way: /mujoco/spawn_urdf_model", spawn_r2d2),
         (f'turn tinybot: /control_robot_angle, {duration} s at {velocity} rad/s',
          lambda node: turn_robot(node, duration, velocity)),
+        (f'turn tinybot by the action: turn_robot, {ACTION_TURN[0]:.3f} rad at up to '
+         f'{ACTION_TURN[1]} rad/s', lambda node: turn_by_action(node, *ACTION_TURN)),
+        (f'cancel a turn half way: turn_robot, {CANCELED_TURN[0]:.3f} rad at up to '
+         f'{CANCELED_TURN[1]} rad/s', lambda node: cancel_half_way(node, *CANCELED_TURN)),
         ('delete R2-D2: /mujoco/delete_model', delete_r2d2),
         ('reset the simulation: /mujoco/reset_simulation', reset),
     ]

@@ -1,5 +1,6 @@
 """The main job end to end: turning_demo starts the world and the server and walks the lesson."""
 
+import math
 import os
 import re
 import signal
@@ -34,18 +35,30 @@ def test_demo_walks_the_lesson_and_measures_the_turn(tmp_path):
 
     assert finished.returncode == 0, finished.stdout + finished.stderr
     output = finished.stdout
-    for step in ('[1/4] spawn R2-D2', '[2/4] turn tinybot', '[3/4] delete R2-D2',
-                 '[4/4] reset the simulation'):
+    for step in ('[1/6] spawn R2-D2', '[2/6] turn tinybot', '[3/6] turn tinybot by the action',
+                 '[4/6] cancel a turn half way', '[5/6] delete R2-D2',
+                 '[6/6] reset the simulation'):
         assert step in output
-    assert output.count('success: True') == 3
+    assert output.count('success: True') == 4
     turned = re.search(r'commanded 1\.000 rad, tinybot turned (-?\d+\.\d+) rad', output)
     assert turned, output
     # The turn's accuracy is the turning server tests' business; here it must be about right.
     assert float(turned.group(1)) == pytest.approx(1.0, rel=0.1)
+    by_action = re.search(r'asked for 1\.571 rad, tinybot turned (-?\d+\.\d+) rad', output)
+    assert by_action, output
+    assert float(by_action.group(1)) == pytest.approx(math.pi / 2, rel=0.05)
+    assert 'status: SUCCEEDED' in output and 'status: CANCELED' in output
+    canceled = re.search(r'canceled at (\d+\.\d+) rad by the feedback; the result says '
+                         r'(\d+\.\d+) rad, tinybot turned (\d+\.\d+) rad', output)
+    assert canceled, output
+    at, reported, truth = (float(angle) for angle in canceled.groups())
+    assert math.pi / 2 <= at <= reported < math.pi * 0.75
+    assert reported == pytest.approx(truth, abs=0.02)
     assert output.rstrip().endswith('done')
     assert (tmp_path / 'mujoco_world.log').stat().st_size > 0
     assert (tmp_path / 'robot_turning_server.log').stat().st_size > 0
-    assert len(child_pids(output)) == 2
+    assert (tmp_path / 'robot_turning_action_server.log').stat().st_size > 0
+    assert len(child_pids(output)) == 3
     assert_gone(child_pids(output))
 
 
@@ -54,7 +67,7 @@ def test_a_failing_step_stops_the_demo_with_a_clear_message(tmp_path):
 
     assert finished.returncode == 1
     assert 'refused' in finished.stderr
-    assert '[3/4]' not in finished.stdout
+    assert '[3/6]' not in finished.stdout
     assert 'faster than max_angular_vel' in (tmp_path / 'robot_turning_server.log').read_text()
     assert_gone(child_pids(finished.stdout))
 
@@ -66,7 +79,7 @@ def test_ctrl_c_mid_demo_stops_the_children(tmp_path):
         seen = []
         for line in demo.stdout:
             seen.append(line)
-            if line.startswith('[2/4]'):
+            if line.startswith('[2/6]'):
                 break
         demo.send_signal(signal.SIGINT)
         rest = demo.stdout.read()
@@ -79,4 +92,5 @@ def test_ctrl_c_mid_demo_stops_the_children(tmp_path):
 
     assert 'interrupted' in rest
     assert 'mujoco_world stopped' in rest and 'robot_turning_server stopped' in rest
+    assert 'robot_turning_action_server stopped' in rest
     assert_gone(child_pids(''.join(seen)))

@@ -1,0 +1,317 @@
+"""The turning action server through turn_robot, turning tinybot in the MuJoCo world."""
+
+import math
+import os
+
+from action_msgs.msg import GoalStatus
+from action_msgs.srv import CancelGoal
+from ament_index_python.packages import get_package_prefix
+from geometry_msgs.msg import Twist
+import pytest
+from rcl_interfaces.msg import Parameter as ParameterMsg, ParameterType, ParameterValue
+from rcl_interfaces.srv import DescribeParameters, SetParameters
+from rclpy.action import ActionClient
+from rclpy.parameter import Parameter
+from service_tutorial.conversions import seconds_of, yaw_of
+from service_tutorial.model_services import call
+from service_tutorial.mujoco_world import MujocoWorld
+from service_tutorial.robot_turning_action_server import RobotTurningActionServer
+from srv_interfaces.action import TurnRobot
+from srv_interfaces.srv import GetModelState
+
+pytestmark = pytest.mark.ros
+
+# Wall-clock patience for one turn; the outcomes asserted are all in simulation time.
+TURN_TIMEOUT = 60.0
+
+
+class GroundTruth:
+    """Tinybot's heading from /mujoco/get_model_state, summed in small steps to unwrap it."""
+
+    def __init__(self, action_world):
+        self.action_world = action_world
+        self.samples = []  # (simulation time, yaw rate) of every sample taken
+        state = action_world.state()
+        self.last = yaw_of(state.pose.orientation)
+        self.turned = 0.0
+        self.time = seconds_of(state.header.stamp)
+        self.yaw_rate = state.twist.angular.z
+
+    def sample(self):
+        """Read the state once more; return it (always true, to sample inside wait_for)."""
+        state = self.action_world.state()
+        heading = yaw_of(state.pose.orientation)
+        self.turned += math.remainder(heading - self.last, math.tau)
+        self.last = heading
+        self.time = seconds_of(state.header.stamp)
+        self.yaw_rate = state.twist.angular.z
+        self.samples.append((self.time, self.yaw_rate))
+        return state
+
+    def follow_until(self, predicate, *, timeout=TURN_TIMEOUT):
+        """Keep sampling until predicate() holds; return whether it came to hold."""
+        return self.action_world.ros.wait_for(
+            lambda: self.sample() and predicate(), timeout=timeout, period=0.001)
+
+    def wait_at_rest(self):
+        assert self.follow_until(lambda: abs(self.yaw_rate) < 1e-3), 'tinybot did not stop'
+
+    def wait_sim(self, duration):
+        """Sample until `duration` more seconds of simulation time have passed."""
+        end = self.time + duration
+        assert self.follow_until(lambda: self.time >= end)
+
+
+class Goal:
+    """One goal sent through the test's action client, with the feedback it received."""
+
+    def __init__(self, action_world, angle, angular_vel):
+        self.ros = action_world.ros
+        self.feedback = []
+        future = action_world.action_client.send_goal_async(
+            TurnRobot.Goal(angle=angle, angular_vel=angular_vel),
+            feedback_callback=lambda msg: self.feedback.append(msg.feedback))
+        assert self.ros.wait_for(future.done), 'no answer to the goal'
+        self.handle = future.result()
+        self.result_future = self.handle.get_result_async() if self.handle.accepted else None
+
+    def done(self):
+        return self.result_future.done()
+
+    def result(self):
+        """Return the goal's status and result, waiting for them if need be."""
+        assert self.ros.wait_for(self.result_future.done, timeout=TURN_TIMEOUT)
+        response = self.result_future.result()
+        return response.status, response.result
+
+
+class ActionWorld:
+    """The world in real time, the action server on simulation time, and a client for both."""
+
+    def __init__(self, ros, **server_parameters):
+        self.ros = ros
+        self.world = ros.add_node(MujocoWorld(parameter_overrides=[
+            Parameter('real_time_factor', value=1.0)]))
+        overrides = [Parameter('use_sim_time', value=True)]
+        overrides += [Parameter(name, value=value) for name, value in server_parameters.items()]
+        self.server = ros.add_node(RobotTurningActionServer(parameter_overrides=overrides))
+        self.cmd_vel = ros.subscribe(Twist, '/cmd_vel')
+        node = ros.client_node
+        self.state_cli = node.create_client(GetModelState, '/mujoco/get_model_state')
+        self.action_client = ActionClient(node, TurnRobot, '/turn_robot')
+        assert self.action_client.wait_for_server(timeout_sec=10.0)
+
+    def state(self):
+        request = GetModelState.Request(model_name='tinybot', reference_frame='world')
+        state = call(self.ros.client_node, self.state_cli, request)
+        assert state.success, state.status_message
+        return state
+
+    def turn(self, angle, angular_vel):
+        """Turn by the action; return its status, result, feedback and the ground truth turn."""
+        truth = GroundTruth(self)
+        truth.wait_at_rest()
+        truth.turned = 0.0
+        goal = Goal(self, angle, angular_vel)
+        assert goal.handle.accepted
+        assert truth.follow_until(goal.done)
+        truth.wait_at_rest()
+        status, result = goal.result()
+        return status, result, goal.feedback, truth.turned
+
+    def destroy(self):
+        self.action_client.destroy()
+
+
+@pytest.fixture
+def action_world(ros):
+    action_world = ActionWorld(ros)
+    yield action_world
+    action_world.destroy()
+
+
+def test_a_quarter_turn_left_ends_on_target_with_rising_feedback(action_world):
+    status, result, feedback, turned = action_world.turn(math.pi / 2, 0.5)
+
+    assert status == GoalStatus.STATUS_SUCCEEDED
+    assert result.success
+    assert turned == pytest.approx(math.pi / 2, rel=0.01)
+    # Stopped within 0.01 rad of the target by the robot's own odometry, close to the truth.
+    assert result.angle_turned == pytest.approx(math.pi / 2, abs=0.01)
+    assert result.angle_turned == pytest.approx(turned, abs=0.02)
+    assert result.message.startswith('reached the goal')
+    # About 3.5 s of simulation time at 10 Hz; each report adds up, and the angle only grows.
+    assert 5 <= len(feedback) <= 60
+    progress = [report.angle_turned for report in feedback]
+    assert all(later >= earlier - 1e-3 for earlier, later in zip(progress, progress[1:]))
+    assert progress[-1] > progress[0] + 1.0
+    for report in feedback:
+        assert report.angle_remaining == pytest.approx(math.pi / 2 - report.angle_turned)
+    # The ramp down: the last commands before the stop are slower than the top speed.
+    commands = [msg.angular.z for msg in action_world.cmd_vel]
+    assert max(commands) == pytest.approx(0.5)
+    assert commands[-1] == 0.0 and 0.0 < commands[-2] < 0.2
+
+
+def test_one_and_a_half_turns_clockwise_are_counted_unwrapped(action_world):
+    status, result, feedback, turned = action_world.turn(-3 * math.pi, 1.5)
+
+    assert status == GoalStatus.STATUS_SUCCEEDED
+    assert result.success
+    assert turned == pytest.approx(-3 * math.pi, rel=0.01)
+    assert result.angle_turned == pytest.approx(-3 * math.pi, abs=0.01)
+    progress = [-report.angle_turned for report in feedback]
+    assert len(progress) >= 5
+    assert all(later >= earlier - 1e-3 for earlier, later in zip(progress, progress[1:]))
+    assert progress[-1] > math.pi  # past half a revolution, still counting
+
+
+def test_a_cancel_stops_tinybot_at_once_and_returns_what_was_turned(action_world):
+    server = action_world.server
+    canceled_at = []
+
+    def cancel_callback(goal_handle):
+        canceled_at.append(seconds_of(server.get_clock().now().to_msg()))
+        return server.cancel_callback(goal_handle)
+
+    server.turn_robot_server.register_cancel_callback(cancel_callback)
+    truth = GroundTruth(action_world)
+    truth.wait_at_rest()
+    truth.turned = 0.0
+    goal = Goal(action_world, 2.0, 0.5)
+    truth.wait_sim(1.0)
+    assert truth.yaw_rate == pytest.approx(0.5, abs=0.05), 'not turning at full speed yet'
+
+    cancel = goal.handle.cancel_goal_async()
+    assert action_world.ros.wait_for(cancel.done)
+    assert cancel.result().return_code == CancelGoal.Response.ERROR_NONE
+    (accepted_at,) = canceled_at
+    first_sample = len(truth.samples)
+    assert truth.follow_until(lambda: truth.time >= accepted_at + 0.5)
+    truth.wait_at_rest()
+    status, result = goal.result()
+
+    after = [(time, rate) for time, rate in truth.samples[first_sample:]
+             if time >= accepted_at + 0.2]
+    assert after and after[0][0] <= accepted_at + 0.5
+    assert all(abs(rate) < 0.05 for _, rate in after), after
+    assert status == GoalStatus.STATUS_CANCELED
+    assert not result.success
+    assert result.message.startswith('canceled')
+    assert 0.3 < result.angle_turned < 1.0
+    assert result.angle_turned == pytest.approx(truth.turned, abs=0.02)
+
+
+def test_a_second_goal_replaces_the_first(action_world):
+    truth = GroundTruth(action_world)
+    truth.wait_at_rest()
+    truth.turned = 0.0
+    first = Goal(action_world, 3.0, 0.5)
+    assert truth.follow_until(
+        lambda: first.feedback and first.feedback[-1].angle_turned > 0.3)
+
+    second = Goal(action_world, -1.0, 1.0)
+    assert second.handle.accepted
+    first_status, first_result = first.result()
+    assert truth.follow_until(second.done)
+    truth.wait_at_rest()
+    second_status, second_result = second.result()
+
+    assert first_status == GoalStatus.STATUS_ABORTED
+    assert not first_result.success
+    assert first_result.message.startswith('replaced by a newer goal')
+    assert 0.3 < first_result.angle_turned < 3.0
+    assert second_status == GoalStatus.STATUS_SUCCEEDED
+    assert second_result.angle_turned == pytest.approx(-1.0, abs=0.01)
+    assert truth.turned == pytest.approx(first_result.angle_turned - 1.0, abs=0.03)
+
+
+@pytest.mark.parametrize('angle, angular_vel, reason', [
+    (math.nan, 0.5, 'angle nan is not a finite number'),
+    (math.inf, 0.5, 'angle inf is not a finite number'),
+    (1.0, math.nan, 'angular_vel nan is not a finite number'),
+    (1.0, 0.0, 'angular_vel 0.0 rad/s must be above 0'),
+    (1.0, -1.0, 'angular_vel -1.0 rad/s must be above 0'),
+    (1.0, 2.0, 'angular_vel 2.0 rad/s is faster than max_angular_vel 1.5707 rad/s'),
+    (1000.0, 0.5, 'angle 1000.0 rad is beyond max_angle 62.8319 rad'),
+], ids=['nan-angle', 'infinite-angle', 'nan-velocity', 'zero-velocity', 'negative-velocity',
+        'too-fast', 'too-far'])
+def test_bad_goals_are_rejected_and_tinybot_stays_still(
+        action_world, capfd, angle, angular_vel, reason):
+    truth = GroundTruth(action_world)
+    truth.wait_at_rest()
+    before = truth.last
+
+    goal = Goal(action_world, angle, angular_vel)
+    truth.wait_sim(0.5)
+
+    assert not goal.handle.accepted
+    assert action_world.cmd_vel == []
+    assert truth.last == pytest.approx(before, abs=1e-4)
+    assert f'rejected goal: {reason}' in capfd.readouterr().err
+
+
+def test_the_limits_are_inclusive_and_a_zero_turn_succeeds_at_once(action_world):
+    status, result, feedback, turned = action_world.turn(0.0, 1.5707)
+
+    assert status == GoalStatus.STATUS_SUCCEEDED
+    assert result.angle_turned == pytest.approx(0.0, abs=1e-3)
+    assert turned == pytest.approx(0.0, abs=1e-3)
+    assert all(msg.angular.z == 0.0 for msg in action_world.cmd_vel)
+    ten_turns_right = Goal(action_world, -20 * math.pi, 1.5707)
+    assert ten_turns_right.handle.accepted
+    ten_turns_right.handle.cancel_goal_async()
+    status, result = ten_turns_right.result()
+    assert status == GoalStatus.STATUS_CANCELED
+
+
+def test_parameters_are_described_and_held_to_their_ranges(ros):
+    ros.add_node(RobotTurningActionServer())
+    names = ['max_angular_vel', 'max_angle', 'angle_tolerance', 'deceleration', 'response_time',
+             'odom_timeout', 'feedback_rate']
+
+    described = ros.call(DescribeParameters, '/robot_turning_action_server/describe_parameters',
+                         DescribeParameters.Request(names=names)).descriptors
+
+    assert all(descriptor.description for descriptor in described)
+    read_only = {descriptor.name for descriptor in described if descriptor.read_only}
+    assert read_only == {'feedback_rate'}
+    ranges = {descriptor.name: descriptor.floating_point_range[0] for descriptor in described}
+    assert ranges['max_angular_vel'].to_value == pytest.approx(1.5707)
+
+    def set_double(name, value):
+        parameter = ParameterMsg(name=name, value=ParameterValue(
+            type=ParameterType.PARAMETER_DOUBLE, double_value=value))
+        return ros.call(SetParameters, '/robot_turning_action_server/set_parameters',
+                        SetParameters.Request(parameters=[parameter])).results[0]
+
+    assert not set_double('max_angular_vel', 2.0).successful
+    assert not set_double('feedback_rate', 20.0).successful
+    assert set_double('max_angular_vel', 1.0).successful
+
+
+def test_a_goal_without_odometry_is_aborted_with_the_reason(ros):
+    ros.add_node(RobotTurningActionServer(
+        parameter_overrides=[Parameter('odom_timeout', value=0.2)]))
+    action_client = ActionClient(ros.client_node, TurnRobot, '/turn_robot')
+    try:
+        assert action_client.wait_for_server(timeout_sec=10.0)
+        future = action_client.send_goal_async(TurnRobot.Goal(angle=1.0, angular_vel=0.5))
+        assert ros.wait_for(future.done)
+        result_future = future.result().get_result_async()
+        assert ros.wait_for(result_future.done)
+    finally:
+        action_client.destroy()
+
+    response = result_future.result()
+    assert response.status == GoalStatus.STATUS_ABORTED
+    assert response.result.message.startswith('no odometry on /odom for 0.2 s')
+    assert response.result.angle_turned == 0.0
+
+
+def test_both_programs_are_executables_of_the_package():
+    # What `ros2 pkg executables service_tutorial` lists: the executable files in lib/<package>.
+    directory = os.path.join(get_package_prefix('service_tutorial'), 'lib', 'service_tutorial')
+    executables = {name for name in os.listdir(directory)
+                   if os.access(os.path.join(directory, name), os.X_OK)}
+    assert {'robot_turning_action_server', 'robot_turning_action_client'} <= executables
