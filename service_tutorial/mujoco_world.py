@@ -43,7 +43,7 @@ def declare_parameters(node):
 
 
 def resolve_model_path(model):
-    """Find a model file: an absolute path, or a file in the package's models/ folder."""
+    """Find a model or scenery file: an absolute path, or a file in the package's models/."""
     if os.path.isabs(model):
         return model
     return os.path.join(get_package_share_directory(PACKAGE), 'models', model)
@@ -70,9 +70,11 @@ class MujocoWorld(Node):
     def __init__(self, **kwargs):
         super().__init__('mujoco', **kwargs)
         parameters = declare_parameters(self)
+        scenery = parameters['scenery']
         self.world = World(timestep=parameters['timestep'],
                            cmd_vel_timeout=parameters['cmd_vel_timeout'],
-                           package_resolver=get_package_share_directory)
+                           package_resolver=get_package_share_directory,
+                           scenery=resolve_model_path(scenery) if scenery else None)
         self.real_time_factor = max(0.0, parameters['real_time_factor'])
         self.pacer = Pacer(timestep=self.world.timestep, real_time_factor=self.real_time_factor,
                            periods={
