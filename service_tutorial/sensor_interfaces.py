@@ -4,11 +4,15 @@ The ROS faces of the sensor plugins: sensor_msgs LaserScan, Image with CameraInf
 A face makes its sensor active while one of its topics has a subscriber (its publishers'
 matched events tell it), and publishes each reading the sensor hands it, stamped with the
 simulation time of the reading: nothing is measured or built for a topic nobody listens to.
-Topics land where gazebo_ros puts them (ros_names.plugin_topic); frames are the block's
-frameName (ROS 1) or frame_name (ROS 2), else the sensor's link.
+Free-running (real_time_factor 0), a sensor is also held to its rate in wall time, as the
+world node holds every stream: far faster than real time, a 5 Hz laser would otherwise cast
+and publish hundreds of scans per wall second. Topics land where gazebo_ros puts them
+(ros_names.plugin_topic); frames are the block's frameName (ROS 1) or frame_name (ROS 2), else
+the sensor's link.
 """
 
 import array
+import time
 
 from rclpy.event_handler import PublisherEventCallbacks
 from sensor_msgs.msg import CameraInfo, Image, Imu, LaserScan
@@ -49,6 +53,9 @@ class SensorFace:
         self.node = node
         self.sensor = sensor
         self.publishers = []
+        self.listened = False
+        self.resume_at = None  # wall time at which a sensor held free-running measures again
+        sensor.listener = self.reading_callback
 
     def publisher(self, msg_type, topic, depth):
         """Make a publisher whose matched subscribers keep the sensor active."""
@@ -62,8 +69,31 @@ class SensorFace:
 
     def matched_callback(self, event):
         """Measure while any of the sensor's topics has a subscriber."""
-        self.sensor.set_active(any(publisher.get_subscription_count() > 0
-                                   for publisher in self.publishers))
+        self.listened = any(publisher.get_subscription_count() > 0
+                            for publisher in self.publishers)
+        self._switch()
+
+    def _switch(self):
+        self.sensor.set_active(self.listened and self.resume_at is None)
+
+    def reading_callback(self, sensor):
+        """Publish a reading; free-running, hold the sensor for its period of wall time."""
+        self.publish_reading(sensor)
+        node = self.node
+        if node.has_parameter('real_time_factor') and \
+                node.get_parameter('real_time_factor').value <= 0.0:
+            self.resume_at = time.monotonic() + sensor.period
+            self._switch()
+
+    def publish_reading(self, sensor):
+        """Publish the sensor's latest reading (each kind of face says how)."""
+        raise NotImplementedError
+
+    def resume_due(self, wall_time):
+        """Let a sensor held free-running measure again once its wall time has come."""
+        if self.resume_at is not None and wall_time >= self.resume_at:
+            self.resume_at = None
+            self._switch()
 
     def destroy(self):
         """Stop the sensor and remove its topics from the node."""
@@ -101,9 +131,8 @@ class LaserScanFace(SensorFace):
         msg.scan_time = sensor.period
         msg.range_min, msg.range_max = config.range_min, config.range_max
         self.scan_pub = self.publisher(LaserScan, topic, 10)
-        sensor.listener = self.publish_scan
 
-    def publish_scan(self, sensor):
+    def publish_reading(self, sensor):
         """Publish the scan the laser just made."""
         msg = self.scan_msg
         fill_time_msg(msg.header.stamp, sensor.reading_time)
@@ -141,9 +170,8 @@ class CameraFace(SensorFace):
             Image, plugin_topic(block, image_topic, robot_namespace=namespace), 2)
         self.info_pub = self.publisher(
             CameraInfo, plugin_topic(block, info_topic, robot_namespace=namespace), 2)
-        sensor.listener = self.publish_image
 
-    def publish_image(self, sensor):
+    def publish_reading(self, sensor):
         """Publish the frame the camera just rendered, and its camera_info."""
         stamp = sensor.reading_time
         if self.image_pub.get_subscription_count() > 0:
@@ -207,9 +235,8 @@ class ImuFace(SensorFace):
         msg.linear_acceleration_covariance = _diagonal(
             sensor.covariance('linear_acceleration'))
         self.imu_pub = self.publisher(Imu, topic, 10)
-        sensor.listener = self.publish_imu
 
-    def publish_imu(self, sensor):
+    def publish_reading(self, sensor):
         """Publish the IMU's latest reading."""
         msg = self.imu_msg
         fill_time_msg(msg.header.stamp, sensor.reading_time)
@@ -245,7 +272,10 @@ class SensorInterface:
             raise
 
     def publish(self, stream, now):
-        """Publish nothing on the node's streams: each reading goes out as it is made."""
+        """On the node's streams, let sensors held free-running measure again when due."""
+        wall_time = time.monotonic()
+        for face in self.faces:
+            face.resume_due(wall_time)
 
     def destroy(self):
         """Stop the sensors and remove their topics."""

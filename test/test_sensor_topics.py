@@ -2,6 +2,7 @@
 
 import math
 import os
+import time
 
 from geometry_msgs.msg import Pose
 import numpy as np
@@ -59,7 +60,7 @@ class SensorWorld:
 
 
 def test_laser_scan_on_its_topic_only_while_someone_listens(ros):
-    world = SensorWorld(ros, scenery='', real_time_factor=0.0)
+    world = SensorWorld(ros, scenery='', real_time_factor=2.0)
     world.spawn('post', read_test_model('sensor_laser'), namespace='post')
     world.spawn('wall', read_test_model('sensor_wall'), x=1.05)
     assert '/post/scan' in world.topics()
@@ -88,6 +89,28 @@ def test_laser_scan_on_its_topic_only_while_someone_listens(ros):
     start = world.node.world.time
     assert ros.wait_for(lambda: world.node.world.time > start + 0.5)
     assert laser.reading_time == last
+
+
+def test_free_running_a_sensor_is_held_to_its_rate_in_wall_time_too(ros):
+    world = SensorWorld(ros, scenery='', real_time_factor=0.0)
+    world.spawn('post', read_test_model('sensor_laser'), namespace='post')
+    world.spawn('wall', read_test_model('sensor_wall'), x=1.05)
+    scans = []
+    subscription = ros.client_node.create_subscription(LaserScan, '/post/scan', scans.append, 10)
+    try:
+        assert ros.wait_for(lambda: scans, timeout=10.0)
+        start, first = time.monotonic(), len(scans)
+        sim_start = world.node.world.time
+        assert ros.wait_for(lambda: world.node.world.time > sim_start + 20.0, timeout=60.0)
+        wall = time.monotonic() - start
+        count = len(scans) - first
+    finally:
+        ros.client_node.destroy_subscription(subscription)
+    # 10 Hz of simulation time would be 200 scans; held to 10 per wall second, far fewer.
+    assert 1 <= count <= 10.0 * wall + 2, f'{count} scans in {wall:.2f} s of wall time'
+    stamps = [seconds(msg.header.stamp) for msg in scans]
+    assert min(np.diff(stamps)) >= 0.1 - 1e-6
+    assert all(msg.ranges[90] == pytest.approx(1.0, abs=0.005) for msg in scans)
 
 
 def test_camera_image_and_camera_info_of_a_ros1_camera(ros):

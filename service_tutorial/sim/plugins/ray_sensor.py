@@ -94,8 +94,11 @@ class RaySensor(Sensor):
         """Precompute the beams in the sensor frame and the buffers of a cast."""
         super().__init__(config, block)
         self._directions = config.directions()
+        # Buffers of a cast, made once: the beams in the world frame, what each ray hit.
+        self._world_directions = np.zeros((config.samples, 3))
         self._geom_ids = np.zeros(config.samples, dtype=np.int32)
         self._distances = np.zeros(config.samples)
+        self._noise = np.zeros(config.samples)
         self.ranges = np.full(config.samples, np.inf, dtype=np.float32)
         self._own_geoms = np.zeros(0, dtype=int)
         self._own_groups = np.zeros(0, dtype=int)
@@ -123,36 +126,40 @@ class RaySensor(Sensor):
     def read(self):
         """Cast the scan's rays from the sensor and turn the distances into ranges."""
         mj_model, data, config = self.world.model, self.world.data, self.config
-        rotation = data.site_xmat[self.site_id].reshape(3, 3)
-        directions = (self._directions @ rotation.T).ravel()
+        np.matmul(self._directions, data.site_xmat[self.site_id].reshape(3, 3).T,
+                  out=self._world_directions)
         groups = mj_model.geom_group
         groups[self._own_geoms] = HIDDEN_GROUP
         try:
             # flg_static 1: the floor and the scenery are fixed to the world, and seen.
-            mujoco.mj_multiRay(mj_model, data, data.site_xpos[self.site_id], directions,
-                               RAY_GEOM_GROUPS, 1, -1, self._geom_ids, self._distances, None,
-                               config.samples, config.range_max)
+            mujoco.mj_multiRay(mj_model, data, data.site_xpos[self.site_id],
+                               self._world_directions.reshape(-1), RAY_GEOM_GROUPS, 1, -1,
+                               self._geom_ids, self._distances, None, config.samples,
+                               config.range_max)
         finally:
             groups[self._own_geoms] = self._own_groups
-        self.ranges[:] = scan_ranges(self._distances, self._geom_ids, config, self.random)
+        scan_ranges(self._distances, self._geom_ids, config, self.random, self._noise)
+        self.ranges[:] = self._distances
 
 
-def scan_ranges(distances, geom_ids, config, random):
+def scan_ranges(distances, geom_ids, config, random, noise):
     """
-    Return the ranges of a scan from the distances of its rays (REP 117).
+    Turn the distances of a scan's rays into its ranges, in place (REP 117).
 
     No return, or one at or beyond range_max, reads +inf; one at or below range_min reads
-    -inf. Readings in between get the gaussian noise and stay within the range.
+    -inf. Readings in between get the gaussian noise, drawn into the buffer noise, and stay
+    within the range.
     """
-    ranges = np.where(geom_ids >= 0, distances, math.inf)
-    ranges[ranges >= config.range_max] = math.inf
-    ranges[ranges <= config.range_min] = -math.inf
+    distances[geom_ids < 0] = math.inf
+    distances[distances >= config.range_max] = math.inf
+    distances[distances <= config.range_min] = -math.inf
     if config.noise_stddev > 0.0 or config.noise_mean != 0.0:
-        inside = np.isfinite(ranges)
-        noisy = ranges[inside] + random.normal(config.noise_mean, config.noise_stddev,
-                                               np.count_nonzero(inside))
-        ranges[inside] = np.clip(noisy, config.range_min, config.range_max)
-    return ranges
+        random.standard_normal(out=noise)
+        noise *= config.noise_stddev
+        noise += config.noise_mean
+        noise += distances
+        np.clip(noise, config.range_min, config.range_max, out=noise)
+        np.copyto(distances, noise, where=np.isfinite(distances))
 
 
 PLUGIN = RaySensor
