@@ -107,7 +107,7 @@ def test_free_running_a_sensor_is_held_to_its_rate_in_wall_time_too(ros):
     finally:
         ros.client_node.destroy_subscription(subscription)
     # 10 Hz of simulation time would be 200 scans; held to 10 per wall second, far fewer.
-    assert 1 <= count <= 10.0 * wall + 2, f'{count} scans in {wall:.2f} s of wall time'
+    assert count <= 10.0 * wall + 2, f'{count} scans in {wall:.2f} s of wall time'
     stamps = [seconds(msg.header.stamp) for msg in scans]
     assert min(np.diff(stamps)) >= 0.1 - 1e-6
     assert all(msg.ranges[90] == pytest.approx(1.0, abs=0.005) for msg in scans)
