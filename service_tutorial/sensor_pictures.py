@@ -1,6 +1,5 @@
 """
-Pictures of tinybot's sensors in the yard: its scan drawn on a view from above, and a frame
-of its camera.
+Pictures of tinybot's sensors in the yard: its scan seen from above, and its camera's view.
 
 No ROS here: a World with the default scenery (models/yard.urdf), tinybot at its start and
 R2-D2 where the lesson drops it; the laser and the camera measure exactly as they do for their
@@ -120,7 +119,7 @@ def main(args=None):
     options = parse_arguments(sys.argv[1:] if args is None else args)
     paths, returns = make_pictures(options.output, yaw=options.yaw, size=options.size)
     print(f'{paths[0]}: the yard from above, {returns} laser returns drawn')
-    print(f'{paths[1]}: what tinybot\'s camera sees')
+    print(f"{paths[1]}: what tinybot's camera sees")
     return 0
 
 
