@@ -15,6 +15,9 @@ from launch_ros.substitutions import FindPackageShare
 PACKAGE = 'service_tutorial'
 # RViz's displays name absolute topics (config/world.rviz); in a namespace they follow it.
 RVIZ_TOPICS = ('/robot_description', '/odom', '/scan', '/mujoco/camera/image_raw')
+# The world publishes each robot's robot_description itself: robot_state_publisher's copy of
+# the same text goes aside, so that the topic has one publisher.
+RSP_DESCRIPTION_REMAP = ('robot_description', 'robot_state_publisher/robot_description')
 
 
 def installed(package):
@@ -45,7 +48,8 @@ def start_rviz(context, namespace):
     with open(os.path.join(share, 'models', 'tinybot.urdf')) as urdf_file:
         tinybot = urdf_file.read()
     return [
-        # Places tinybot's links on /tf from its joint_states; the world gives odom -> base.
+        # Places tinybot's links on /tf and /tf_static from its joint_states; the world gives
+        # odom -> base_footprint on /tf and tinybot's URDF on robot_description.
         Node(
             package='robot_state_publisher',
             executable='robot_state_publisher',
@@ -55,6 +59,7 @@ def start_rviz(context, namespace):
                 'robot_description': ParameterValue(tinybot, value_type=str),
                 'use_sim_time': sim_time(),
             }],
+            remappings=[RSP_DESCRIPTION_REMAP],
         ),
         Node(
             package='rviz2',

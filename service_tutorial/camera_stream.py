@@ -7,6 +7,10 @@ camera_rate, in Hz of simulation time like the node's other rates, but only whil
 subscribes: without subscribers next_due stays infinite, so the stepping loop never stops for
 the camera, and publish_due() looks for a subscriber a few times per wall second. The renderer
 and its GL context are made on first use.
+
+configure() takes the node's camera parameters at start-up and whichever of them are set at
+run time: enabling or disabling makes or removes the topics, a new rate moves the next frame,
+a new size, pose or field of view makes a new camera (its renderer again made on first use).
 """
 
 import math
@@ -21,33 +25,63 @@ from std_srvs.srv import Trigger
 
 CAMERA_FRAME = 'camera_optical_frame'  # z forward, x right, y down (REP 103, optical frames)
 SUBSCRIBER_CHECK_PERIOD = 0.2  # s of wall time between two looks for a first subscriber
+# The world parameters the camera follows, and those of them that make a new camera.
+VIEW_PARAMETERS = ('camera_width', 'camera_height', 'camera_position', 'camera_look_at',
+                   'camera_fovy')
+CAMERA_PARAMETERS = ('camera_enabled', 'camera_rate', *VIEW_PARAMETERS, 'snapshot_directory')
 
 
 class CameraStream:
     """Renders the world for ~/camera/image_raw and ~/camera/camera_info, and snapshots."""
 
     def __init__(self, node, world, parameters):
-        """Make the camera from the node's camera_* parameters (a dict of values)."""
+        """Make the camera from the node's camera parameters (a mapping of their values)."""
         self.node = node
         self.world = world
-        self.enabled = bool(parameters['camera_enabled'])
-        rate = float(parameters['camera_rate'])
-        if self.enabled and not rate > 0.0:
-            raise ValueError(f'camera_rate must be above 0 Hz, got {rate}')
-        self.period = 1.0 / rate if self.enabled else math.inf
-        self.camera = SceneCamera(
-            parameters['camera_width'], parameters['camera_height'],
-            list(parameters['camera_position']), list(parameters['camera_look_at']),
-            parameters['camera_fovy'])
-        self.snapshot_directory = parameters['snapshot_directory'] or os.getcwd()
+        self.enabled = False
+        self.rate = parameters['camera_rate']
+        self.period = math.inf  # s of simulation time between frames; inf: disabled
+        self.view = {}  # the camera's VIEW_PARAMETERS, by name
+        self.camera = None
+        self.snapshot_directory = os.getcwd()
         self.next_due = math.inf  # simulation time of the next frame; inf: nobody listens
         self._next_subscriber_check = 0.0
         self.image_pub = self.info_pub = None
-        if self.enabled:
-            self.image_pub = node.create_publisher(Image, '~/camera/image_raw', 2)
-            self.info_pub = node.create_publisher(CameraInfo, '~/camera/camera_info', 2)
         self.snapshot_srv = node.create_service(
             Trigger, '~/save_snapshot', self.save_snapshot_callback)
+        self.configure(parameters)
+
+    def configure(self, settings):
+        """Apply some or all of CAMERA_PARAMETERS (a mapping of their values), at once."""
+        view = {name: settings[name] for name in VIEW_PARAMETERS if name in settings}
+        if view:
+            view = {**self.view, **view}
+            camera = SceneCamera(view['camera_width'], view['camera_height'],
+                                 list(view['camera_position']), list(view['camera_look_at']),
+                                 view['camera_fovy'])
+            if self.camera is not None:
+                self.camera.close()
+            self.camera, self.view = camera, view
+        if 'snapshot_directory' in settings:
+            self.snapshot_directory = settings['snapshot_directory'] or os.getcwd()
+        if 'camera_rate' in settings:
+            self.rate = settings['camera_rate']
+        enabled = settings.get('camera_enabled', self.enabled)
+        if enabled and not self.enabled:
+            self.image_pub = self.node.create_publisher(Image, '~/camera/image_raw', 2)
+            self.info_pub = self.node.create_publisher(CameraInfo, '~/camera/camera_info', 2)
+            self._next_subscriber_check = 0.0
+        elif self.enabled and not enabled:
+            self.node.destroy_publisher(self.image_pub)
+            self.node.destroy_publisher(self.info_pub)
+            self.image_pub = self.info_pub = None
+            self.next_due = math.inf
+        self.enabled = enabled
+        period = 1.0 / self.rate if enabled else math.inf
+        if self.next_due < math.inf:
+            # The next frame comes one new period after the last one.
+            self.next_due += period - self.period
+        self.period = period
 
     def publish_due(self, now):
         """Publish a frame and its camera_info if one is due and anyone listens."""
@@ -129,4 +163,5 @@ class CameraStream:
 
     def close(self):
         """Release the renderer and its GL context."""
-        self.camera.close()
+        if self.camera is not None:
+            self.camera.close()

@@ -70,6 +70,14 @@ def fill_pose_msg(pose, position, orientation):
     return pose
 
 
+def fill_transform_msg(transform, position, orientation):
+    """Write a position and a MuJoCo (w, x, y, z) quaternion into a geometry_msgs/Transform."""
+    translation = transform.translation
+    translation.x, translation.y, translation.z = (float(v) for v in position)
+    fill_quaternion_msg(transform.rotation, orientation)
+    return transform
+
+
 def make_pose(x=0.0, y=0.0, z=0.0, *, yaw=None, quaternion=None):
     """Build a geometry_msgs/Pose from a position and a yaw or an (x, y, z, w) quaternion."""
     if yaw is not None and quaternion is not None:

@@ -13,14 +13,12 @@ from geometry_msgs.msg import Twist
 from nav_msgs.msg import Odometry
 from sensor_msgs.msg import JointState
 from service_tutorial.conversions import fill_pose_msg, fill_time_msg, fill_twist_msg
+from service_tutorial.pacing import JOINT_STATES_STREAM, ODOMETRY_STREAM
 from service_tutorial.ros_names import topic_prefix
 from service_tutorial.sensor_interfaces import SENSOR_INTERFACES
 from service_tutorial.sim.plugins.diff_drive import MAX_WHEEL_RIM_SPEED
 from service_tutorial.sim.validation import WorldError
-
-# The node's publication streams the plugins' topics go out on.
-ODOMETRY_STREAM = 'odom'
-JOINT_STATES_STREAM = 'joint_states'
+from service_tutorial.tf_interface import OdomTfInterface
 
 
 class DiffDriveInterface:
@@ -100,7 +98,7 @@ class DiffDriveInterface:
 
 
 # Every kind of plugin that has a ROS face, in the order their topics are made.
-PLUGIN_INTERFACES = (DiffDriveInterface,) + SENSOR_INTERFACES
+PLUGIN_INTERFACES = (DiffDriveInterface, OdomTfInterface) + SENSOR_INTERFACES
 
 
 class ModelInterface:

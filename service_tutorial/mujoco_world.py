@@ -2,10 +2,15 @@
 The MuJoCo world node: the Gazebo of this tutorial.
 
 It steps a service_tutorial.sim.world.World, serves the world services under /mujoco/ and
-publishes /clock; each model's own topics (cmd_vel, odom and joint_states of a diff drive) come
-from its ModelInterface, made when the model is spawned. A Pacer decides how far each tick
-steps and which streams are due. Stepping runs in a timer of the node's single callback group,
-so a service callback and a physics step never run at the same time and no locks are needed.
+publishes /clock; each model's own topics (cmd_vel, odom and joint_states of a diff drive, its
+odometry on /tf) come from its ModelInterface, made when the model is spawned, and a model with
+topics also gets its URDF on robot_description. A Pacer decides how far each tick steps and
+which streams are due. Stepping runs in a timer of the node's single callback group, so a
+service callback, a parameter change and a physics step never run at the same time and no locks
+are needed.
+
+The parameters are declared in world_parameters.py, and every one that is not read-only takes
+effect as soon as it is set. What the simulation logs reaches the node's logger (and /rosout).
 """
 
 import os
@@ -13,33 +18,32 @@ import os
 from ament_index_python.packages import get_package_share_directory
 from rclpy.clock import Clock as WallClock, ClockType
 from rclpy.node import Node
+from rclpy.parameter import Parameter
+from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from rosgraph_msgs.msg import Clock
-from service_tutorial.camera_stream import CameraStream
+from service_tutorial.camera_stream import CAMERA_PARAMETERS, CameraStream
 from service_tutorial.client_main import spin_node
 from service_tutorial.conversions import fill_pose_msg, fill_time_msg, fill_twist_msg
 from service_tutorial.conversions import pose_from_msg, time_msg, twist_from_msg
 from service_tutorial.conversions import yaw_quaternion
-from service_tutorial.model_interface import JOINT_STATES_STREAM, ModelInterface
-from service_tutorial.model_interface import ODOMETRY_STREAM
-from service_tutorial.pacing import Pacer
+from service_tutorial.log_forwarding import forward_core_logs
+from service_tutorial.model_interface import ModelInterface
+from service_tutorial.pacing import CLOCK_STREAM, JOINT_STATES_STREAM, ODOMETRY_STREAM, Pacer
 from service_tutorial.ros_names import normalise_namespace
 from service_tutorial.sim.validation import WorldError
-from service_tutorial.sim.world import World
+from service_tutorial.tf_interface import make_tf_publisher, RobotDescriptionPublisher
+from service_tutorial.world_parameters import declare_world_parameters, run_or_exit
 from srv_interfaces.srv import DeleteModel, GetModelList, GetModelState, SetModelState
 from srv_interfaces.srv import SpawnModel
 from std_srvs.srv import Empty
-import yaml
 
 PACKAGE = 'service_tutorial'
-CLOCK_STREAM = 'clock'
-
-
-def declare_parameters(node):
-    """Declare the node's parameters with the defaults of config/world.yaml; return values."""
-    path = os.path.join(get_package_share_directory(PACKAGE), 'config', 'world.yaml')
-    with open(path) as config_file:
-        defaults = yaml.safe_load(config_file)['mujoco']['ros__parameters']
-    return {name: node.declare_parameter(name, value).value for name, value in defaults.items()}
+# As gazebo_ros publishes /clock: the latest time waits for every subscriber, a late one too.
+CLOCK_QOS = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
+                       durability=DurabilityPolicy.TRANSIENT_LOCAL)
+# The parameter that gives each publication stream its rate, in Hz.
+RATE_PARAMETERS = {CLOCK_STREAM: 'clock_publish_rate', ODOMETRY_STREAM: 'odom_publish_rate',
+                   JOINT_STATES_STREAM: 'joint_state_publish_rate'}
 
 
 def resolve_model_path(model):
@@ -69,24 +73,39 @@ class MujocoWorld(Node):
 
     def __init__(self, **kwargs):
         super().__init__('mujoco', **kwargs)
-        parameters = declare_parameters(self)
+        self.parameters = parameters = declare_world_parameters(self)  # ParameterError if bad
+        self.forwarded_logs = forward_core_logs(self)
+        try:
+            self._start(parameters)
+        except BaseException:
+            self.forwarded_logs.stop()
+            raise
+        self.get_logger().info(
+            f'MuJoCo world ready: {", ".join(self.world.model_names()) or "no models"}, '
+            f'timestep {self.world.timestep} s, real_time_factor '
+            f'{parameters["real_time_factor"]}')
+
+    def _start(self, parameters):
+        """Make the world, its services and topics, and the start-up models."""
+        # Imported here, after the parameters passed their checks: a bad one ends the program
+        # before the simulation's imports (yourdfpy and trimesh take over a second).
+        from service_tutorial.sim.world import World
         scenery = parameters['scenery']
         self.world = World(timestep=parameters['timestep'],
                            cmd_vel_timeout=parameters['cmd_vel_timeout'],
                            package_resolver=get_package_share_directory,
                            scenery=resolve_model_path(scenery) if scenery else None)
-        self.real_time_factor = max(0.0, parameters['real_time_factor'])
-        self.pacer = Pacer(timestep=self.world.timestep, real_time_factor=self.real_time_factor,
-                           periods={
-                               CLOCK_STREAM: 1.0 / parameters['clock_publish_rate'],
-                               ODOMETRY_STREAM: 1.0 / parameters['odom_publish_rate'],
-                               JOINT_STATES_STREAM: 1.0 / parameters['joint_state_publish_rate'],
-                           })
+        self.pacer = Pacer(timestep=self.world.timestep,
+                           real_time_factor=parameters['real_time_factor'],
+                           periods={stream: 1.0 / parameters[name]
+                                    for stream, name in RATE_PARAMETERS.items()})
         self._clock_msg = Clock()
         self.models = {}  # name -> ModelInterface, in spawn order
+        self.robot_descriptions = {}  # name -> RobotDescriptionPublisher, models with topics
         self.viewer = None
 
-        self.clock_pub = self.create_publisher(Clock, '/clock', 10)
+        self.clock_pub = self.create_publisher(Clock, '/clock', CLOCK_QOS)
+        self.tf_pub = make_tf_publisher(self)  # shared by the models' OdomTfInterfaces
         self.spawn_srv = self.create_service(
             SpawnModel, '~/spawn_urdf_model', self.spawn_model_callback)
         self.delete_srv = self.create_service(
@@ -118,6 +137,12 @@ class MujocoWorld(Node):
         if parameters['gui']:
             self._open_viewer()
 
+        # Every parameter that is not read-only takes effect when it is set.
+        parameters.on_change(self.pace_changed, ['real_time_factor', *RATE_PARAMETERS.values()])
+        parameters.on_change(self.paused_changed, ['paused'])
+        parameters.on_change(self.cmd_vel_timeout_changed, ['cmd_vel_timeout'])
+        parameters.on_change(self.camera_stream.configure, CAMERA_PARAMETERS)
+
         # Free-running stepping uses a zero-period timer: it fires on every executor turn,
         # and the executor serves pending service calls between two turns.
         self.pacer.anchor(self.world.time)
@@ -127,9 +152,29 @@ class MujocoWorld(Node):
             self.pacer.first_tick_period, self.step_callback,
             clock=WallClock(clock_type=ClockType.STEADY_TIME))
         self.publish_clock()
-        self.get_logger().info(
-            f'MuJoCo world ready: {", ".join(self.world.model_names()) or "no models"}, '
-            f'timestep {self.world.timestep} s, real_time_factor {self.real_time_factor}')
+
+    # --- parameters set at run time -----------------------------------------------------------
+
+    def pace_changed(self, changes):
+        """Apply a new real_time_factor (0: free-running) or publish rate from now on."""
+        for stream, name in RATE_PARAMETERS.items():
+            if name in changes:
+                self.pacer.set_period(stream, 1.0 / changes[name])
+        if 'real_time_factor' in changes:
+            self.pacer.set_real_time_factor(changes['real_time_factor'], self.world.time)
+            self.step_timer.timer_period_ns = self.pacer.tick_period_ns(self.world.paused)
+
+    def paused_changed(self, changes):
+        """Stop or resume stepping, whether the parameter or a pause service asked."""
+        if changes['paused']:
+            self.world.pause()
+        else:
+            self.world.unpause()
+            self.pacer.anchor(self.world.time)
+
+    def cmd_vel_timeout_changed(self, changes):
+        """Let every drive command lapse after the new timeout, those in force too."""
+        self.world.set_cmd_vel_timeout(changes['cmd_vel_timeout'])
 
     # --- stepping -----------------------------------------------------------------------------
 
@@ -142,6 +187,8 @@ class MujocoWorld(Node):
             self.step_timer.timer_period_ns = period_ns
         if world.paused:
             pacer.anchor(world.time)
+            if pacer.repeat_due():  # the same time again, for a late joiner
+                self.publish_clock()
         else:
             for steps in pacer.chunks(lambda: world.time, lambda: self.camera_stream.next_due):
                 world.step(steps)
@@ -185,7 +232,10 @@ class MujocoWorld(Node):
                               reference_frame=reference_frame, base_dir=base_dir)
         try:
             self.models[name] = ModelInterface(self, self.world, name, namespace)
+            if self.models[name].plugins:
+                self.robot_descriptions[name] = RobotDescriptionPublisher(self, namespace, urdf)
         except Exception:
+            self._forget_model(name)
             self.world.delete_model(name)
             raise
         if self.viewer is not None:
@@ -193,9 +243,10 @@ class MujocoWorld(Node):
 
     def _forget_model(self, name):
         """Destroy the ROS interface of a model that left the world."""
-        model = self.models.pop(name, None)
-        if model is not None:
-            model.destroy()
+        for interfaces in (self.models, self.robot_descriptions):
+            interface = interfaces.pop(name, None)
+            if interface is not None:
+                interface.destroy()
 
     def spawn_model_callback(self, request, response):
         """Spawn a URDF model; failures are answered, never raised."""
@@ -282,14 +333,13 @@ class MujocoWorld(Node):
         self.publish_due()
 
     def pause_physics_callback(self, request, response):
-        """Stop stepping; services and /clock keep answering."""
-        self.world.pause()
+        """Stop stepping; services and /clock keep answering. The paused parameter follows."""
+        self.set_parameters([Parameter('paused', Parameter.Type.BOOL, True)])
         return response
 
     def unpause_physics_callback(self, request, response):
-        """Resume stepping from where it stopped."""
-        self.world.unpause()
-        self.pacer.anchor(self.world.time)
+        """Resume stepping from where it stopped. The paused parameter follows."""
+        self.set_parameters([Parameter('paused', Parameter.Type.BOOL, False)])
         return response
 
     # --- viewer -------------------------------------------------------------------------------
@@ -310,17 +360,18 @@ class MujocoWorld(Node):
             self.viewer.sync()
 
     def destroy_node(self):
-        """Close the viewer along with the node."""
+        """Close the viewer along with the node, and stop passing the core's logs on."""
         if self.viewer is not None:
             self.viewer.close()
             self.viewer = None
         self.camera_stream.close()
+        self.forwarded_logs.stop()
         return super().destroy_node()
 
 
 def main(args=None):
-    """Run the MuJoCo world until Ctrl-C."""
-    return spin_node(MujocoWorld, args=args)
+    """Run the MuJoCo world until Ctrl-C; a bad parameter ends it with one line, status 2."""
+    return run_or_exit(spin_node, MujocoWorld, args=args)
 
 
 if __name__ == '__main__':

@@ -15,12 +15,21 @@ The executor's turn between two ticks costs CPU time that grows with the node's 
 1.8 ms with 50 robots), so ticks are spaced to keep it a small share of the time. Free-running,
 a tick steps EXECUTOR_SHARE times as long as a turn (STEP_BUDGET to MAX_STEP_BUDGET); in real
 time, ticks come every REAL_TIME_SHARE turns (REAL_TIME_PERIOD to MAX_REAL_TIME_PERIOD); paused,
-there is nothing to step and ticks come every PAUSED_TICK_PERIOD.
+there is nothing to step and ticks come every PAUSED_TICK_PERIOD, and /clock is said again
+every PAUSED_CLOCK_PERIOD of wall time (repeat_due), so that a late joiner learns the time.
+
+The real-time factor and the streams' periods may change at run time (set_real_time_factor,
+set_period): the pace changes from the current simulation time on, and a stream's next turn
+moves by the change of its period.
 """
 
 import math
 import time
 
+# The world node's publication streams: /clock, and its models' odometry and joint states.
+CLOCK_STREAM = 'clock'
+ODOMETRY_STREAM = 'odom'
+JOINT_STATES_STREAM = 'joint_states'
 STEP_BUDGET = 0.005
 EXECUTOR_SHARE = 20.0
 MAX_STEP_BUDGET = 0.05
@@ -28,6 +37,7 @@ REAL_TIME_SHARE = 5.0
 REAL_TIME_PERIOD = 0.002
 MAX_REAL_TIME_PERIOD = 0.02
 PAUSED_TICK_PERIOD = 0.02
+PAUSED_CLOCK_PERIOD = 0.1
 # Further behind real time than this (s), the machine cannot keep up: do not try to catch up.
 MAX_LAG = 0.1
 NANOSECONDS = 1_000_000_000
@@ -52,6 +62,7 @@ class Pacer:
         self._tick_end_cpu = None
         self._wall_anchor = wall_clock()
         self._sim_anchor = 0.0
+        self._next_repeat = 0.0
 
     # --- ticks --------------------------------------------------------------------------------
 
@@ -64,6 +75,22 @@ class Pacer:
         """Tie simulation time to the wall clock from now on (start, pause, reset)."""
         self._wall_anchor = self._wall_clock()
         self._sim_anchor = sim_time
+
+    def set_real_time_factor(self, real_time_factor, sim_time):
+        """Run at another pace (0: free-running) from simulation time sim_time on."""
+        self.real_time_factor = max(0.0, real_time_factor)
+        self.free_running = self.real_time_factor == 0.0
+        # Wall-time turns only hold streams back while free-running.
+        self._next_wall = dict.fromkeys(self._periods, 0.0)
+        self.anchor(sim_time)
+
+    def repeat_due(self):
+        """Tell whether a paused world should say its time again (every PAUSED_CLOCK_PERIOD)."""
+        wall = self._wall_clock()
+        if wall < self._next_repeat:
+            return False
+        self._next_repeat = wall + PAUSED_CLOCK_PERIOD
+        return True
 
     def start_tick(self):
         """Note the CPU time the executor spent since the last tick ended."""
@@ -161,6 +188,14 @@ class Pacer:
         period = self._periods[name]
         self._next_sim[name] = now + period
         self._next_wall[name] = self._wall_clock() + period if self.free_running else 0.0
+
+    def set_period(self, name, period):
+        """Give a stream another period (s); its next turn moves by the difference."""
+        change = period - self._periods[name]
+        self._periods[name] = period
+        self._next_sim[name] += change
+        if self._next_wall[name]:
+            self._next_wall[name] += change
 
     def restart(self, now, names):
         """Make streams due at once, at simulation time now (after a reset)."""

@@ -25,10 +25,9 @@ from rclpy.node import Node
 from rclpy.task import Future
 from service_tutorial.client_main import spin_node
 from service_tutorial.conversions import yaw_of
+from service_tutorial.robot_turning_server import MAX_ANGULAR_VEL
 from srv_interfaces.action import TurnRobot
 
-# pi / 2: the fastest turn the lesson allows, in rad/s.
-MAX_ANGULAR_VEL = 1.5707
 # Ten turns, in rad.
 MAX_ANGLE = 20.0 * math.pi
 # Below this yaw rate, in rad/s, the robot counts as at rest after it was told to stop.

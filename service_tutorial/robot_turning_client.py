@@ -14,10 +14,9 @@ import rclpy
 from rclpy.node import Node
 from service_tutorial.client_main import program_arguments, run_node
 from service_tutorial.model_services import response_text
+from service_tutorial.robot_turning_server import MAX_ANGULAR_VEL
 from srv_interfaces.srv import ControlTurningMessage
 
-# pi / 2: the fastest turn the lesson allows, in rad/s.
-MAX_ANGULAR_VEL = 1.5707
 MAX_UINT32 = 2**32 - 1
 DURATION_PROMPT = '> Type turning time duration: '
 VELOCITY_PROMPT = '> Type turning angular velocity: '

@@ -21,6 +21,9 @@ from rclpy.task import Future
 from service_tutorial.client_main import spin_node
 from srv_interfaces.srv import ControlTurningMessage
 
+# pi / 2: the fastest turn the lesson allows, in rad/s.
+MAX_ANGULAR_VEL = 1.5707
+
 
 class Turn:
     """One accepted request: its command, when it started, and the future its caller awaits."""
@@ -41,7 +44,7 @@ class RobotTurningServer(Node):
         super().__init__('robot_turning_server', **kwargs)
         self.declare_parameter('publish_rate', 20.0, ParameterDescriptor(
             description='how often cmd_vel is repeated during a turn, in Hz', read_only=True))
-        self.declare_parameter('max_angular_vel', 1.5707, ParameterDescriptor(
+        self.declare_parameter('max_angular_vel', MAX_ANGULAR_VEL, ParameterDescriptor(
             description='fastest turn accepted, in rad/s (either direction)'))
         self.declare_parameter('max_duration', 60, ParameterDescriptor(
             description='longest turn accepted, in seconds'))

@@ -114,6 +114,19 @@ def test_every_rviz_topic_follows_the_namespace(launch_tree, rviz_config):
     assert set(ast.literal_eval(remapped.value)) == topics
 
 
+def test_robot_state_publisher_leaves_robot_description_to_the_world(launch_tree):
+    # The world publishes robot_description (transient local) for each robot with topics; a
+    # second publisher on the same topic would make RViz show whichever text came last.
+    publishers = [call for call in calls_to(launch_tree, 'Node')
+                  if ast.unparse(keyword(call, 'executable')) == "'robot_state_publisher'"]
+    assert len(publishers) == 1
+    assert ast.unparse(keyword(publishers[0], 'remappings')) == '[RSP_DESCRIPTION_REMAP]'
+    remap = next(node for node in launch_tree.body if isinstance(node, ast.Assign)
+                 and ast.unparse(node.targets[0]) == 'RSP_DESCRIPTION_REMAP')
+    source, target = ast.literal_eval(remap.value)
+    assert source == 'robot_description' and target.strip('/') != 'robot_description'
+
+
 def test_rviz_config_and_launch_file_are_installed():
     share = get_package_share_directory('service_tutorial')
     for relative in ('config/world.rviz', 'launch/world.launch.py'):

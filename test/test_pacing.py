@@ -177,3 +177,49 @@ def test_with_nothing_due_a_chunk_takes_every_step_it_may():
     pacer = Pacer(timestep=TIMESTEP, real_time_factor=1.0, periods={})
     assert pacer.steps_to_next_due(0.0, limit=7) == 7
     assert pacer.take_due(0.0) == []
+
+
+def test_a_new_real_time_factor_sets_the_pace_from_now_on():
+    pacer, world, wall, _ = make(1.0)
+    wall.now += 0.1
+    world.tick()
+    assert world.steps == 50
+    pacer.set_real_time_factor(2.0, world.time)
+    wall.now += 0.04
+    world.tick()
+    assert world.steps == 50 + 40, 'twice as fast, counted from the change, not from start'
+    pacer.set_real_time_factor(0.0, world.time)
+    assert pacer.free_running and pacer.tick_period_ns(paused=False) == 0
+    world.step_cost = 1e-5
+    world.tick()
+    assert world.steps > 90 + 400, 'free-running: a whole budget of steps in one tick'
+    pacer.set_real_time_factor(1.0, world.time)
+    steps = world.steps
+    wall.now += 0.02
+    world.tick()
+    # Back in real time, /clock every 2 steps of the 10.
+    assert world.steps == steps + 10
+    assert len([step for step in world.published['clock'] if step > steps]) == 5
+
+
+def test_a_new_period_moves_the_next_turn_by_the_difference():
+    pacer, world, wall, _ = make(1.0)
+    world.tick()
+    assert world.published['odom'] == [0]
+    pacer.set_period('odom', 0.004)  # from every 10 steps to every 2
+    wall.now += 0.01
+    world.tick()
+    assert world.published['odom'] == [0, 2, 4]
+    pacer.set_period('odom', 0.1)
+    wall.now += 0.1
+    world.tick()
+    assert world.published['odom'] == [0, 2, 4, 54]
+
+
+def test_a_paused_world_says_its_time_again_every_paused_clock_period():
+    pacer, world, wall, _ = make(1.0)
+    assert pacer.repeat_due() and not pacer.repeat_due()
+    wall.now += pacing.PAUSED_CLOCK_PERIOD - 0.001
+    assert not pacer.repeat_due()
+    wall.now += 0.001
+    assert pacer.repeat_due()

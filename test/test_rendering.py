@@ -25,7 +25,8 @@ R2D2_BODY = (-2.0, 1.0, 1.45)  # the middle of R2-D2 standing at its spawn pose
 def camera_defaults():
     """Read the camera parameters of config/world.yaml, the node's defaults."""
     with open(os.path.join(ROOT, 'config', 'world.yaml')) as config_file:
-        parameters = yaml.safe_load(config_file)['mujoco']['ros__parameters']
+        (node,) = yaml.safe_load(config_file).values()  # mujoco, or a wildcard such as /**
+        parameters = node['ros__parameters']
     return {name: parameters['camera_' + name]
             for name in ('width', 'height', 'position', 'look_at', 'fovy')}
 

@@ -296,6 +296,28 @@ def test_command_times_out_and_the_wheels_stop(tinybot_world):
     np.testing.assert_allclose(world.get_model_state('tinybot').position, position, atol=1e-4)
 
 
+def test_a_new_cmd_vel_timeout_applies_to_the_command_in_force(tinybot_world):
+    world = tinybot_world
+    world.set_cmd_vel_timeout(0.0)  # never lapse
+    world.command_velocity('tinybot', 0.2, 0.0)
+    world.step(500)  # 1 s, twice the default timeout
+    assert world.odometry('tinybot').linear_velocity[0] == pytest.approx(0.2, rel=0.02)
+    # The command came 1 s ago: with a timeout of 0.6 s it lapsed, and the wheels stop now.
+    world.set_cmd_vel_timeout(0.6)
+    world.step(150)  # the wheels ramp down at 1 m/s^2 for 0.2 s
+    _, _, wheel_speeds = world.joint_state('tinybot')
+    np.testing.assert_allclose(wheel_speeds, 0.0, atol=1e-3)
+    # A new command lasts the new timeout.
+    world.command_velocity('tinybot', 0.2, 0.0)
+    world.step(250)
+    assert world.odometry('tinybot').linear_velocity[0] == pytest.approx(0.2, rel=0.02)
+    world.step(250)
+    _, _, wheel_speeds = world.joint_state('tinybot')
+    np.testing.assert_allclose(wheel_speeds, 0.0, atol=1e-3)
+    with pytest.raises(WorldError, match='cmd_vel_timeout must not be negative: -1.0'):
+        world.set_cmd_vel_timeout(-1)
+
+
 def test_diff_drive_requests_are_checked(world):
     world.spawn_urdf_file('r2d2', R2D2)
     with pytest.raises(WorldError, match="model 'r2d2' has no diff drive"):

@@ -103,3 +103,11 @@ def check_model_name(name):
         raise WorldError(f'model name {shown} contains a character that is not allowed')
     if name in WORLD_FRAMES:
         raise WorldError(f'model name {shown} is reserved for the world frame')
+
+
+def non_negative_number(value, what):
+    """Return value as a finite float of 0 or more, or refuse it."""
+    number = finite_number(value, what)
+    if number < 0.0:
+        raise WorldError(f'{what} must not be negative: {number}')
+    return number

@@ -83,9 +83,7 @@ class World:
         if timestep <= 0.0:
             raise WorldError(f'timestep must be positive: {timestep}')
         gravity = validation.vector(gravity, 3, 'gravity')
-        cmd_vel_timeout = validation.finite_number(cmd_vel_timeout, 'cmd_vel_timeout')
-        if cmd_vel_timeout < 0.0:
-            raise WorldError(f'cmd_vel_timeout must not be negative: {cmd_vel_timeout}')
+        cmd_vel_timeout = validation.non_negative_number(cmd_vel_timeout, 'cmd_vel_timeout')
         _route_mujoco_messages()
         self._timestep = timestep
         self._gravity = gravity
@@ -392,6 +390,12 @@ class World:
         return self._spawned(name).joint_state(self._data)
 
     # ---------------------------------------------------------------- diff drive
+
+    def set_cmd_vel_timeout(self, seconds):
+        """Let drive commands lapse after seconds (0: never), those in force as well."""
+        self._cmd_vel_timeout = validation.non_negative_number(seconds, 'cmd_vel_timeout')
+        plugins.set_command_timeout(self._models.values(), self._cmd_vel_timeout)
+        self.schedule_events()
 
     def command_velocity(self, name, linear_x, angular_z):
         """

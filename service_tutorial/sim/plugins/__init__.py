@@ -48,6 +48,13 @@ def update_due(models, now):
                 plugin.update(now)
 
 
+def set_command_timeout(models, timeout):
+    """Let the commands of the models' plugins lapse timeout s after they came (0: never)."""
+    for model in models:
+        for plugin in model.plugins:
+            plugin.set_timeout(timeout)
+
+
 @dataclass(frozen=True)
 class PluginSetup:
     """A configured plugin of a robot description: its kind, raw block and parsed config."""
@@ -96,6 +103,9 @@ class Plugin:
 
     def update(self, now):
         """Handle every event due by simulation time now."""
+
+    def set_timeout(self, timeout):
+        """Let a command in force lapse timeout s after it came (0: never), if it takes any."""
 
     def reset(self):
         """Start again from rest, as at spawn."""

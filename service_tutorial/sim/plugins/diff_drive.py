@@ -311,6 +311,7 @@ class DiffDrive(Plugin):
         self.targets = np.zeros(wheel_count)
         self.ramp_end = np.full(wheel_count, math.inf)
         self.expiry = math.inf
+        self.commanded_at = None  # simulation time of the command in force, if there is one
         self.encoder = EncoderOdometry(config.wheel_separation, config.wheel_radius)
         self.origin_position = np.zeros(3)
         self.origin_orientation = np.array(frames.IDENTITY_QUATERNION)
@@ -368,8 +369,14 @@ class DiffDrive(Plugin):
             left, right = left * scale, right * scale
         self._update_encoder()
         self._set_wheel_targets(left, right)
-        self.expiry = self.world.data.time + timeout if timeout > 0.0 else math.inf
+        self.commanded_at = self.world.data.time
+        self.set_timeout(timeout)
         return linear_x, angular_z
+
+    def set_timeout(self, timeout):
+        """Let the command in force lapse timeout seconds after it came (0: never)."""
+        if self.commanded_at is not None:
+            self.expiry = self.commanded_at + timeout if timeout > 0.0 else math.inf
 
     def _set_wheel_targets(self, left, right):
         """
@@ -405,6 +412,7 @@ class DiffDrive(Plugin):
             self._update_encoder()
             self._set_wheel_targets(0.0, 0.0)
             self.expiry = math.inf
+            self.commanded_at = None
 
     def reset(self):
         """Stop the wheels at once, drop the command and start odometry where the robot is."""
@@ -412,6 +420,7 @@ class DiffDrive(Plugin):
         self.targets[:] = 0.0
         self.ramp_end[:] = math.inf
         self.expiry = math.inf
+        self.commanded_at = None
         data.act[self._act_adr] = 0.0
         data.ctrl[self._actuator_ids] = 0.0
         qpos = data.qpos

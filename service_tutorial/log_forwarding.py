@@ -1,0 +1,71 @@
+"""
+What the simulation logs through Python's logging, passed on to a node's rclpy logger.
+
+The core (service_tutorial.sim) knows nothing of ROS and logs to the `service_tutorial` loggers:
+spawns, deletes, recoveries, MuJoCo's warnings. forward_core_logs(node) hangs a handler on that
+logger which hands each record to the node's logger, so that the console of `ros2 run` and
+/rosout show it under the node's name; the handle it returns takes the handler off again.
+
+The records still propagate to the root logger as usual: an application that configured
+logging for itself (or pytest's caplog) sees them too, and a plain `ros2 run` has no root
+handler, so nothing is printed twice. The `service_tutorial` logger is given the node logger's
+level while forwarding, since Python's default level (WARNING) would drop spawns and deletes.
+"""
+
+import logging
+
+CORE_LOGGER = 'service_tutorial'
+
+
+class RclpyHandler(logging.Handler):
+    """A logging.Handler that writes each record to an rclpy logger at the same severity."""
+
+    def __init__(self, ros_logger):
+        super().__init__()
+        self.ros_logger = ros_logger
+
+    def emit(self, record):
+        """Pass a record on; rclpy wants one call site per severity, hence the five calls."""
+        try:
+            message = self.format(record)
+            if record.levelno >= logging.CRITICAL:
+                self.ros_logger.fatal(message)
+            elif record.levelno >= logging.ERROR:
+                self.ros_logger.error(message)
+            elif record.levelno >= logging.WARNING:
+                self.ros_logger.warning(message)
+            elif record.levelno >= logging.INFO:
+                self.ros_logger.info(message)
+            else:
+                self.ros_logger.debug(message)
+        except Exception:  # a failing log call must not fail the step that logged
+            self.handleError(record)
+
+
+class ForwardedLogs:
+    """The handler forward_core_logs() installed, and the level it replaced."""
+
+    def __init__(self, handler, logger, previous_level):
+        self.handler = handler
+        self.logger = logger
+        self.previous_level = previous_level
+
+    def stop(self):
+        """Take the handler off and give the logger its level back."""
+        if self.handler is None:
+            return
+        self.logger.removeHandler(self.handler)
+        self.logger.setLevel(self.previous_level)
+        self.handler = None
+
+
+def forward_core_logs(node):
+    """Send the `service_tutorial` loggers' records to node's logger until stop() is called."""
+    ros_logger = node.get_logger()
+    logger = logging.getLogger(CORE_LOGGER)
+    previous_level = logger.level
+    # rclpy's severities are Python's levels: DEBUG 10, INFO 20, WARN 30, ERROR 40, FATAL 50.
+    logger.setLevel(int(ros_logger.get_effective_level()) or logging.INFO)
+    handler = RclpyHandler(ros_logger)
+    logger.addHandler(handler)
+    return ForwardedLogs(handler, logger, previous_level)

@@ -1,0 +1,88 @@
+"""
+What RViz and robot_state_publisher need from the world: /tf and each robot's description.
+
+OdomTfInterface is a plugin face (see model_interface.PLUGIN_INTERFACES): for a drive whose
+block asks for it (publishOdomTF / publish_odom_tf, true unless the block says otherwise, as in
+Gazebo), it sends the odometry frame -> robot base frame transform on /tf each time odometry
+falls due, stamped with simulation time and carrying exactly the pose that `odom` carries at
+that stamp. The node has one /tf publisher for all of them (make_tf_publisher), as tf2_ros's
+TransformBroadcaster publishes on the absolute /tf whatever the node's namespace.
+
+RobotDescriptionPublisher sends a model's URDF text once on `<namespace>/robot_description`
+(std_msgs/String), transient local with depth 1 as robot_state_publisher does, so a subscriber
+that comes later (RViz, robot_state_publisher) still gets it.
+"""
+
+from geometry_msgs.msg import TransformStamped
+from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+from service_tutorial.conversions import fill_time_msg, fill_transform_msg
+from service_tutorial.pacing import ODOMETRY_STREAM
+from service_tutorial.ros_names import topic_prefix
+from std_msgs.msg import String
+from tf2_msgs.msg import TFMessage
+
+# tf2_ros's TransformBroadcaster: reliable, volatile, depth 100.
+TF_QOS = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE,
+                    durability=DurabilityPolicy.VOLATILE)
+# robot_state_publisher's robot_description: the latest text for every subscriber, late or not.
+LATCHED_QOS = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
+                         durability=DurabilityPolicy.TRANSIENT_LOCAL)
+
+
+def make_tf_publisher(node):
+    """Make the node's one /tf publisher, which every OdomTfInterface shares."""
+    return node.create_publisher(TFMessage, '/tf', TF_QOS)
+
+
+class OdomTfInterface:
+    """A drive's odometry frame -> robot base frame on /tf, in step with its odom topic."""
+
+    @classmethod
+    def applies_to(cls, world, model_name):
+        """Tell whether the model carries a drive that asks for its odometry on /tf."""
+        return (model_name in world.diff_drive_models()
+                and world.diff_drive(model_name).publish_odom_tf)
+
+    def __init__(self, node, world, model_name, prefix):
+        """Send on the node's /tf publisher (node.tf_pub); prefix is not used: /tf is global."""
+        self.world = world
+        self.model_name = model_name
+        self.tf_pub = node.tf_pub
+        # Filled in and published again every time: publish() copies the message.
+        self.transform = TransformStamped()
+        self.tf_msg = TFMessage(transforms=[self.transform])
+
+    def publish(self, stream, now):
+        """Send the transform when odometry falls due at simulation time now."""
+        if stream != ODOMETRY_STREAM:
+            return
+        # The drive face asked for the same odometry a moment ago: the same values come back.
+        odometry = self.world.odometry(self.model_name)
+        if self.tf_pub.get_subscription_count() == 0:
+            return
+        transform = self.transform
+        fill_time_msg(transform.header.stamp, now)
+        transform.header.frame_id = odometry.odometry_frame
+        transform.child_frame_id = odometry.robot_base_frame
+        fill_transform_msg(transform.transform, odometry.position, odometry.orientation)
+        self.tf_pub.publish(self.tf_msg)
+
+    def destroy(self):
+        """Leave the shared /tf publisher to the node."""
+
+
+class RobotDescriptionPublisher:
+    """A model's URDF on `<namespace>/robot_description`, latched for late subscribers."""
+
+    def __init__(self, node, namespace, urdf):
+        """Publish the URDF text once; namespace is normalised ('' or '/a/b')."""
+        self.node = node
+        if isinstance(urdf, bytes):
+            urdf = urdf.decode('utf-8', errors='replace')
+        self.robot_description_pub = node.create_publisher(
+            String, topic_prefix(namespace) + 'robot_description', LATCHED_QOS)
+        self.robot_description_pub.publish(String(data=urdf))
+
+    def destroy(self):
+        """Remove the topic from the node."""
+        self.node.destroy_publisher(self.robot_description_pub)
