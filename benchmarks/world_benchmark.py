@@ -1131,8 +1131,8 @@ def laser_speed_rows(observer, config):
 
 
 def sensor_table(observer, config):
-    """The sensors' cost against bare MuJoCo calls, and against not listening."""
-    table = Table('sensors', 'Sensors: tinybot\'s laser and camera against bare MuJoCo', [
+    """Measure the sensors' cost against bare MuJoCo calls, and against not listening."""
+    table = Table('sensors', "Sensors: tinybot's laser and camera against bare MuJoCo", [
         ('figure', ''), ('sensor', '.3f'), ('bare', '.3f'), ('ratio', '.3f'),
         ('limit', '.2f'), ('within', '')])
     table.rows = [scan_row(360, config), scan_row(720, config), camera_frame_row(config),
