@@ -4,10 +4,10 @@ import math
 
 import pytest
 from service_tutorial.sim.plugins.diff_drive import body_velocity
-from service_tutorial.sim.plugins.diff_drive import DiffDriveConfig
 from service_tutorial.sim.plugins.diff_drive import EncoderOdometry
 from service_tutorial.sim.plugins.diff_drive import integrate_arc
 from service_tutorial.sim.plugins.diff_drive import wheel_speeds
+from service_tutorial.sim.plugins.drive_config import DiffDriveConfig
 
 SEPARATION = 0.2
 RADIUS = 0.033

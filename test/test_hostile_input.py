@@ -6,17 +6,15 @@ leave the node answering, and leave every model exactly where and how fast it wa
 paused while states are compared, so "unchanged" means bit for bit.
 """
 
-import ctypes
 import logging
 import math
 import os
 import re
-import struct
 import subprocess
 import sys
-import threading
 
 from ament_index_python.packages import get_package_share_directory
+from file_opens import FileOpens, write_canary_files, write_hostile_meshes
 from geometry_msgs.msg import Pose, Twist
 from nav_msgs.msg import Odometry
 import pytest
@@ -158,19 +156,10 @@ BAD_SPAWNS = [
      'model_xml contains a DOCTYPE or ENTITY declaration, which is refused'),
     ('mesh at file:///etc/shadow', 'newcomer', mesh_robot('file:///etc/shadow'), pose(), '', '',
      "mesh 'file:///etc/shadow' lies outside the model's folder and package shares"),
-    ('mesh at ../../../../etc/passwd', 'newcomer', mesh_robot('../../../../etc/passwd'), pose(),
-     '', '', "mesh '../../../../etc/passwd' is a relative path but no base directory is set"),
     ('mesh climbing out of a package', 'newcomer',
      mesh_robot('package://service_tutorial/../../../../etc/passwd'), pose(), '', '',
      "mesh 'package://service_tutorial/../../../../etc/passwd' lies outside the model's "
      'folder and package shares'),
-    ('mesh in a missing package', 'newcomer', mesh_robot('package://no_such_package/m.stl'),
-     pose(), '', '',
-     "mesh 'package://no_such_package/m.stl' names package 'no_such_package', which is not "
-     'found'),
-    ('missing mesh in a package', 'newcomer',
-     mesh_robot('package://service_tutorial/meshes/missing.stl'), pose(), '', '',
-     "mesh 'package://service_tutorial/meshes/missing.stl' does not exist"),
     ('NaN position', 'newcomer', read_model('r2d2'), pose(x=math.nan), '', '',
      'position contains NaN or infinity: [nan, 0.0, 0.5]'),
     ('infinite position', 'newcomer', read_model('r2d2'), pose(y=-math.inf), '', '',
@@ -183,6 +172,16 @@ BAD_SPAWNS = [
      'orientation contains NaN or infinity: [1.0, 0.0, 0.0, nan]'),
     ('unknown reference frame', 'newcomer', read_model('r2d2'), pose(), 'nowhere', '',
      "unknown reference frame 'nowhere'"),
+]
+
+# Meshes that cannot be had are left out, as Gazebo does: (case id, mesh filename, why).
+MISSING_MESHES = [
+    ('relative path without a base directory', '../../../../etc/passwd',
+     'a relative path, but no base directory is set'),
+    ('mesh in a missing package', 'package://no_such_package/m.stl',
+     "package 'no_such_package' is not found"),
+    ('missing mesh in a package', 'package://service_tutorial/meshes/missing.stl',
+     'no such file'),
 ]
 
 ORIGIN = pose(z=0.0)
@@ -330,6 +329,18 @@ class TestRefusals:
         assert not response.success
         assert response.status_message == message
 
+    @pytest.mark.parametrize('filename, reason', [case[1:] for case in MISSING_MESHES],
+                             ids=[case[0] for case in MISSING_MESHES])
+    def test_mesh_that_cannot_be_had_is_left_out(self, untouched, filename, reason, caplog):
+        with caplog.at_level(logging.WARNING, logger='service_tutorial.world'):
+            response = untouched.spawn('newcomer', mesh_robot(filename), pose(x=2.0))
+        assert response.success, response.status_message
+        model = untouched.node.world.models['newcomer']
+        assert model.description.missing_meshes == (filename,)
+        assert (f"model 'newcomer': mesh '{filename}' cannot be had, so it is left out: "
+                f'{reason}') in caplog.text
+        assert untouched.delete('newcomer').success
+
     def test_non_unit_quaternion_is_normalised_and_the_spawn_succeeds(self, untouched):
         response = untouched.spawn('turned', read_model('r2d2'), pose(x=2.0, w=0.0, qz=4.0))
         assert response.success, response.status_message
@@ -338,10 +349,11 @@ class TestRefusals:
                                                                       abs=1e-12)
         assert untouched.delete('turned').success
 
-    def test_no_request_reads_a_file_outside_the_models_and_shares(self, untouched, tmp_path):
+    def test_no_request_reads_a_file_outside_the_models_and_shares(self, untouched, tmp_path,
+                                                                   monkeypatch):
         canary = write_canary_files(tmp_path)
         climb = '../' * 12 + str(tmp_path).lstrip('/')
-        requests = [
+        refused = [
             f'<!DOCTYPE robot [<!ENTITY leak SYSTEM "file://{canary["text"]}">]>'
             '<robot name="&leak;"><link name="a"/></robot>',
             f'<!DOCTYPE robot SYSTEM "file://{canary["dtd"]}"><robot name="r"><link name="a"/>'
@@ -352,95 +364,42 @@ class TestRefusals:
             mesh_robot(f'file://{canary["mesh"]}'),
             mesh_robot(canary['mesh']),
             mesh_robot(f'package://service_tutorial/{climb}/secret.obj'),
-            mesh_robot(f'{climb}/secret.obj'),
             mesh_robot('file:///etc/shadow'),
             mesh_robot('/etc/passwd'),
-            mesh_robot('../../../../etc/passwd'),
             mesh_robot('package://service_tutorial/../../../../etc/passwd'),
+        ]
+        # Accepted without the mesh, which is never looked for outside the roots.
+        left_out = [
+            mesh_robot(f'{climb}/secret.obj'),
+            mesh_robot('../../../../etc/passwd'),
             mesh_robot('package://no_such_package/meshes/m.obj'),
         ]
+        # Meshes inside a package share that lead out of it: a Collada texture and an OBJ
+        # material library that are links to the canary, a Collada DOCTYPE naming it. The
+        # mesh loaders read them, and must read nothing they point at.
+        prefix = tmp_path / 'prefix'
+        (prefix / 'share' / 'ament_index' / 'resource_index' / 'packages').mkdir(parents=True)
+        (prefix / 'share' / 'ament_index' / 'resource_index' / 'packages' /
+         'hostile_meshes').touch()
+        loaded = [mesh_robot(f'package://hostile_meshes/{path}') for path in
+                  write_hostile_meshes(prefix / 'share' / 'hostile_meshes', canary)]
+        monkeypatch.setenv('AMENT_PREFIX_PATH',
+                           f'{prefix}{os.pathsep}{os.environ["AMENT_PREFIX_PATH"]}')
         watched = list(canary.values()) + ['/etc/passwd', '/etc/shadow']
         with FileOpens(watched, str(tmp_path)) as opens:
-            for xml in requests:
+            for xml in refused:
                 response = untouched.spawn('reader', xml)
                 assert not response.success, xml
+            for xml in left_out + loaded:
+                response = untouched.spawn('reader', xml)
+                assert response.success, response.status_message
+                assert untouched.delete('reader').success
         assert opens.opened() == []
-
-
-class FileOpens:
-    """
-    Record opens of chosen files: by Python code (an audit hook) and by any code (inotify).
-
-    The audit hook sees open(), io.open() and os.open() from every thread of this process; it
-    cannot be removed, so it only records while a FileOpens is active. inotify also sees the C
-    libraries (MuJoCo, libxml2) open the files in the directories it watches.
-    """
-
-    IN_ACCESS, IN_OPEN = 0x1, 0x20
-    _active = None
-    _hook_lock = threading.Lock()
-    _hook_added = False
-
-    def __init__(self, watched_paths, watched_directory):
-        self.watched = {os.path.realpath(path) for path in watched_paths}
-        self.directory = watched_directory
-        self.python_opens = []
-        self.inotify_opens = []
-
-    @classmethod
-    def _audit(cls, event, args):
-        active = cls._active
-        if active is None or event != 'open' or not args:
-            return
-        path = args[0]
-        if isinstance(path, (str, bytes)):
-            active.python_opens.append(os.fsdecode(path))
-
-    def __enter__(self):
-        with FileOpens._hook_lock:
-            if not FileOpens._hook_added:
-                sys.addaudithook(FileOpens._audit)
-                FileOpens._hook_added = True
-        self._libc = ctypes.CDLL(None, use_errno=True)
-        self._inotify = self._libc.inotify_init1(os.O_NONBLOCK | os.O_CLOEXEC)
-        assert self._inotify >= 0, os.strerror(ctypes.get_errno())
-        watch = self._libc.inotify_add_watch(self._inotify, os.fsencode(self.directory),
-                                             self.IN_OPEN | self.IN_ACCESS)
-        assert watch >= 0, os.strerror(ctypes.get_errno())
-        FileOpens._active = self
-        return self
-
-    def __exit__(self, *exc_info):
-        FileOpens._active = None
-        try:
-            events = os.read(self._inotify, 1 << 16)
-        except BlockingIOError:
-            events = b''
-        finally:
-            os.close(self._inotify)
-        while events:
-            _, _, _, length = struct.unpack_from('iIII', events)
-            name = events[16:16 + length].rstrip(b'\0')
-            self.inotify_opens.append(os.path.join(self.directory, os.fsdecode(name)))
-            events = events[16 + length:]
-
-    def opened(self):
-        """Return the watched files that were opened, by either account."""
-        python = {os.path.realpath(path) for path in self.python_opens if path}
-        return sorted((python | set(self.inotify_opens)) & self.watched)
-
-
-def write_canary_files(folder):
-    """Write files a leaky loader would happily read: a DTD, a text file and a mesh."""
-    paths = {'dtd': folder / 'secret.dtd', 'text': folder / 'secret.txt',
-             'mesh': folder / 'secret.obj', 'mjcf': folder / 'control.xml'}
-    paths['dtd'].write_text('<!ENTITY leak "TOP-SECRET">')
-    paths['text'].write_text('TOP-SECRET')
-    paths['mesh'].write_text('v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\n'
-                             'f 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n')
-    paths['mjcf'].write_text('<mujoco><asset><mesh file="secret.obj"/></asset><worldbody>'
-                             '<geom type="mesh" mesh="secret"/></worldbody></mujoco>')
-    return {kind: str(path) for kind, path in paths.items()}
+        # The watch sees a read through those links.
+        with FileOpens(watched, str(tmp_path)) as opens:
+            with open(prefix / 'share' / 'hostile_meshes' / 'meshes' / 'materials.mtl') as link:
+                link.read()
+        assert opens.opened() == [canary['text']]
 
 
 def test_the_file_watch_sees_python_and_mujoco_reading_a_file(tmp_path):

@@ -12,7 +12,7 @@ ROSDEP_KEYS = {
     'PIL': 'python3-pil', 'hypothesis': 'python3-hypothesis', 'lxml': 'python3-lxml',
     'numpy': 'python3-numpy', 'pytest': 'python3-pytest', 'yaml': 'python3-yaml',
 }
-WITHOUT_KEY = ('mujoco', 'yourdfpy')  # installed with pip; package.xml says so in a comment
+WITHOUT_KEY = ('mujoco', 'yourdfpy', 'trimesh')  # pip-installed; package.xml says so
 # This package, and the modules the tests import from the repository's folders.
 OWN_MODULES = {'service_tutorial'} | {
     os.path.splitext(os.path.basename(path))[0]

@@ -62,7 +62,7 @@ class SensorWorld:
 def test_laser_scan_on_its_topic_only_while_someone_listens(ros):
     world = SensorWorld(ros, scenery='', real_time_factor=2.0)
     world.spawn('post', read_test_model('sensor_laser'), namespace='post')
-    world.spawn('wall', read_test_model('sensor_wall'), x=1.05)
+    world.spawn('wall', read_test_model('props/wall'), x=1.05)
     assert '/post/scan' in world.topics()
     laser = world.node.world.models['post'].plugin(RaySensor)
     start = world.node.world.time
@@ -94,7 +94,7 @@ def test_laser_scan_on_its_topic_only_while_someone_listens(ros):
 def test_free_running_a_sensor_is_held_to_its_rate_in_wall_time_too(ros):
     world = SensorWorld(ros, scenery='', real_time_factor=0.0)
     world.spawn('post', read_test_model('sensor_laser'), namespace='post')
-    world.spawn('wall', read_test_model('sensor_wall'), x=1.05)
+    world.spawn('wall', read_test_model('props/wall'), x=1.05)
     scans = []
     subscription = ros.client_node.create_subscription(LaserScan, '/post/scan', scans.append, 10)
     try:
@@ -117,7 +117,7 @@ def test_free_running_a_sensor_is_held_to_its_rate_in_wall_time_too(ros):
 def test_camera_image_and_camera_info_of_a_ros1_camera(ros):
     world = SensorWorld(ros, scenery='', real_time_factor=0.0)
     world.spawn('eye', read_test_model('sensor_camera'), namespace='eye')
-    world.spawn('box', read_test_model('sensor_red_box'), x=1.5)
+    world.spawn('box', read_test_model('props/red_box'), x=1.5)
     # ROS 1: robotNamespace/cameraName/imageTopicName.
     assert {'/eye/front/rgb/image_raw', '/eye/front/rgb/camera_info'} <= world.topics()
     infos = ros.subscribe(CameraInfo, '/eye/front/rgb/camera_info')

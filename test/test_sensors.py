@@ -17,9 +17,9 @@ from service_tutorial.sim.world import World
 HERE = os.path.dirname(os.path.abspath(__file__))
 TEST_MODELS = os.path.join(HERE, 'models')
 LASER_ROBOT = os.path.join(TEST_MODELS, 'sensor_laser.urdf')
-WALL = os.path.join(TEST_MODELS, 'sensor_wall.urdf')
+WALL = os.path.join(TEST_MODELS, 'props', 'wall.urdf')
 CAMERA_ROBOT = os.path.join(TEST_MODELS, 'sensor_camera.urdf')
-RED_BOX = os.path.join(TEST_MODELS, 'sensor_red_box.urdf')
+RED_BOX = os.path.join(TEST_MODELS, 'props', 'red_box.urdf')
 IMU_ROBOT = os.path.join(TEST_MODELS, 'sensor_imu.urdf')
 # Where sensor_laser.urdf's beams start, standing at the origin.
 LASER_ORIGIN = np.array([0.05, 0.0, 0.32])

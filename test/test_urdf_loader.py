@@ -7,8 +7,9 @@ import mujoco
 import numpy as np
 import pytest
 from service_tutorial.sim.plugins import diff_drive
-from service_tutorial.sim.plugins.diff_drive import ODOMETRY_SOURCE_ENCODER
-from service_tutorial.sim.plugins.diff_drive import ODOMETRY_SOURCE_WORLD
+from service_tutorial.sim.plugins import drive_config
+from service_tutorial.sim.plugins.drive_config import ODOMETRY_SOURCE_ENCODER
+from service_tutorial.sim.plugins.drive_config import ODOMETRY_SOURCE_WORLD
 from service_tutorial.sim.urdf import builder
 from service_tutorial.sim.urdf import hardened_xml
 from service_tutorial.sim.urdf.builder import load_urdf
@@ -173,7 +174,7 @@ ROS2_DIFF_DRIVE = """
 ROS1_DIFF_DRIVE = """
 <gazebo>
   <plugin name="drive" filename="libgazebo_ros_diff_drive.so">
-    <legacyMode>{legacy}</legacyMode>
+    {legacy}
     <leftJoint>left</leftJoint>
     <rightJoint>right</rightJoint>
     <wheelSeparation>0.4</wheelSeparation>
@@ -214,11 +215,14 @@ def test_ros2_diff_drive_plugin():
         assert model.actuator_dyntype[actuator.id] == mujoco.mjtDyn.mjDYN_INTEGRATOR
 
 
-@pytest.mark.parametrize('legacy, swapped', [('false', False), ('true', True)])
+@pytest.mark.parametrize('legacy, swapped', [
+    ('<legacyMode>false</legacyMode>', False), ('<legacyMode>true</legacyMode>', True),
+    ('', False)])
 def test_ros1_diff_drive_plugin(legacy, swapped):
     description = load_urdf(wheeled_robot(ROS1_DIFF_DRIVE.format(legacy=legacy)))
     drive = description.diff_drive
-    # gazebo_ros in ROS 1 drove each wheel with the other side's speed in legacy mode.
+    # gazebo_ros in ROS 1 drove each wheel with the other side's speed in legacy mode, which
+    # Melodic removed: without the tag the wheels are not swapped.
     expected = (('right',), ('left',)) if swapped else (('left',), ('right',))
     assert (drive.left_joints, drive.right_joints) == expected
     assert drive.legacy_mode is swapped
@@ -226,7 +230,7 @@ def test_ros1_diff_drive_plugin(legacy, swapped):
     assert drive.max_wheel_torque == 3.0 and drive.max_wheel_acceleration == 1.5
     assert (drive.odometry_frame, drive.robot_base_frame) == ('odom_b', 'base_b')
     assert drive.odometry_source == ODOMETRY_SOURCE_WORLD
-    assert diff_drive.parameter(description.plugins[0].block, 'command_topic') == 'base/cmd_vel'
+    assert drive_config.parameter(description.plugins[0].block, 'command_topic') == 'base/cmd_vel'
 
 
 def test_diff_drive_defaults_follow_gazebo_ros():
@@ -236,6 +240,9 @@ def test_diff_drive_defaults_follow_gazebo_ros():
     assert drive.odometry_source == ODOMETRY_SOURCE_WORLD
     assert drive.max_wheel_acceleration == 0.0 and drive.max_wheel_torque == 5.0
     assert (drive.odometry_frame, drive.robot_base_frame) == ('odom', 'base_footprint')
+    assert (drive.wheel_separation, drive.wheel_diameter) == (0.34, 0.15)
+    # ROS 2's gazebo_ros publishes no odometry unless told to.
+    assert not drive.publish_odom and not drive.publish_odom_tf
 
 
 def test_robot_without_plugin_has_no_diff_drive():
@@ -296,11 +303,8 @@ def test_package_and_file_uris_resolve_inside_the_share(tmp_path):
     ('/etc/passwd', 'outside the model'),
     ('file:///etc/hosts', 'outside the model'),
     ('package://my_robot/../../outside.obj', 'outside the model'),
-    ('package://unknown_pkg/m.obj', "names package 'unknown_pkg', which is not found"),
     ('http://example.com/m.obj', 'unsupported URI scheme'),
-    ('meshes/body.dae', 'COLLADA (.dae)'),
     ('meshes/body.ply', 'unsupported format'),
-    ('meshes/missing.obj', 'does not exist'),
 ])
 def test_mesh_paths_that_are_refused(tmp_path, filename, message):
     model_dir = tmp_path / 'share' / 'my_robot'
@@ -310,6 +314,23 @@ def test_mesh_paths_that_are_refused(tmp_path, filename, message):
     with pytest.raises(UrdfError, match=message.replace('(', r'\(').replace(')', r'\)')):
         load_urdf(mesh_robot(filename), base_dir=str(model_dir),
                   package_resolver=shares.__getitem__)
+
+
+@pytest.mark.parametrize('filename, reason', [
+    ('package://unknown_pkg/m.obj', "package 'unknown_pkg' is not found"),
+    ('meshes/missing.obj', 'no such file'),
+    ('meshes/body.dae', 'no such file'),
+])
+def test_meshes_that_cannot_be_had_are_left_out(tmp_path, filename, reason):
+    model_dir = tmp_path / 'share' / 'my_robot'
+    (model_dir / 'meshes').mkdir(parents=True)
+    shares = {'my_robot': str(model_dir)}
+    description = load_urdf(mesh_robot(filename), base_dir=str(model_dir),
+                            package_resolver=shares.__getitem__)
+    assert description.missing_meshes == (filename,)
+    assert description.notes == (f"mesh '{filename}' cannot be had, so it is left out: "
+                                 f'{reason}',)
+    assert compiled(description).ngeom == 0
 
 
 def test_symlink_out_of_the_model_folder_is_refused(tmp_path):

@@ -574,10 +574,13 @@ def test_pose_limits_and_extreme_quaternions(world):
 
 def pile(count):
     """Return a robot of count boxes on hinges, all in one place: thousands of contacts."""
+    # Links of one robot collide with each other only if they say so, as in Gazebo.
     links = ''.join(
         f'<link name="b{index}"><inertial><mass value="1"/><inertia ixx="0.01" iyy="0.01" '
         'izz="0.01" ixy="0" ixz="0" iyz="0"/></inertial><collision><geometry>'
-        '<box size="0.3 0.3 0.3"/></geometry></collision></link>' for index in range(count))
+        '<box size="0.3 0.3 0.3"/></geometry></collision></link>'
+        f'<gazebo reference="b{index}"><selfCollide>true</selfCollide></gazebo>'
+        for index in range(count))
     joints = ''.join(
         f'<joint name="j{index}" type="continuous"><parent link="b0"/>'
         f'<child link="b{index}"/><origin xyz="0 0 {0.001 * index}"/></joint>'

@@ -68,6 +68,10 @@ class Model:
         return next((plugin for plugin in self.plugins if isinstance(plugin, plugin_type)),
                     None)
 
+    def drive(self):
+        """Return the model's drive plugin (diff drive, skid steer), or None."""
+        return next((plugin for plugin in self.plugins if plugin.is_drive), None)
+
     def attach(self, spec):
         """Attach the model's bodies to a world spec where it stands now, under its prefix."""
         if self.frame is None:

@@ -13,7 +13,7 @@ from lxml import etree
 import mujoco
 from service_tutorial.sim.urdf.builder import load_urdf
 from service_tutorial.sim.urdf.hardened_xml import MAX_MODEL_XML_BYTES
-from service_tutorial.sim.urdf.hardened_xml import parse_hardened
+from service_tutorial.sim.urdf.hardened_xml import parse_xml
 from service_tutorial.sim.urdf.hardened_xml import UrdfError
 from service_tutorial.sim.validation import quoted
 from service_tutorial.sim.validation import WorldError
@@ -35,8 +35,10 @@ class Scenery:
             raise WorldError(f'cannot read scenery file {quoted(path)}: {error.strerror}') \
                 from None
         what = f'scenery file {quoted(path)}'
+        if len(text) > MAX_MODEL_XML_BYTES:
+            raise WorldError(f'{what} is larger than {MAX_MODEL_XML_BYTES} bytes')
         try:
-            root = parse_hardened(text, what)
+            root = parse_xml(text, what)
         except UrdfError as error:
             raise WorldError(str(error)) from None
         tag = etree.QName(root).localname

@@ -19,7 +19,6 @@ from service_tutorial.sim import scene
 from service_tutorial.sim import validation
 from service_tutorial.sim.frames import ModelState
 from service_tutorial.sim.model import Model
-from service_tutorial.sim.plugins.diff_drive import DiffDrive
 from service_tutorial.sim.recovery import Recovery
 from service_tutorial.sim.recovery import take_steps
 from service_tutorial.sim.scenery import Scenery
@@ -123,6 +122,11 @@ class World:
         return self._timestep
 
     @property
+    def cmd_vel_timeout(self):
+        """Return how long a drive's velocity command lasts, in seconds (0: for ever)."""
+        return self._cmd_vel_timeout
+
+    @property
     def paused(self):
         """Return True while physics is paused."""
         return self._paused
@@ -145,11 +149,11 @@ class World:
         return name in self._models
 
     def diff_drive_models(self):
-        """Return the names of the models that carry a diff drive."""
-        return [name for name, model in self._models.items() if model.plugin(DiffDrive)]
+        """Return the names of the models that carry a drive (diff drive or skid steer)."""
+        return [name for name, model in self._models.items() if model.drive() is not None]
 
     def diff_drive(self, name):
-        """Return the DiffDriveConfig of a model's diff drive."""
+        """Return the DiffDriveConfig of a model's drive."""
         return self._diff_drive(name).config
 
     def _spawned(self, name):
@@ -159,7 +163,7 @@ class World:
         return model
 
     def _diff_drive(self, name):
-        drive = self._spawned(name).plugin(DiffDrive)
+        drive = self._spawned(name).drive()
         if drive is None:
             raise WorldError(f"model '{name}' has no diff drive")
         return drive
@@ -168,7 +172,7 @@ class World:
 
     def spawn_urdf(self, name, urdf_xml, *, position=(0.0, 0.0, 0.0),
                    orientation=frames.IDENTITY_QUATERNION, reference_frame='', base_dir=None):
-        """Add a robot from URDF text; a refused request leaves the world unchanged."""
+        """Add a URDF robot, log its notes and return its Model; a refusal changes nothing."""
         validation.check_model_name(name)
         if name in self._models:
             raise WorldError(f'a model named {quoted(name)} already exists')
@@ -209,16 +213,19 @@ class World:
         self.schedule_events()
         _logger.info("spawned model '%s' at %s", name,
                      np.round(model.spawn_position, 4).tolist())
+        for note in description.notes:
+            _logger.warning("model '%s': %s", name, note)
+        return model
 
     def spawn_urdf_file(self, name, path, **kwargs):
-        """Add a robot from a URDF file; relative mesh paths resolve against its folder."""
+        """Add a robot from a URDF file and return its Model; meshes resolve by its folder."""
         try:
             with open(path, 'rb') as urdf_file:
                 urdf_xml = urdf_file.read(MAX_MODEL_XML_BYTES + 1)
         except OSError as error:
             raise WorldError(f"cannot read URDF file '{path}': {error.strerror}") from None
         kwargs.setdefault('base_dir', os.path.dirname(os.path.abspath(path)))
-        self.spawn_urdf(name, urdf_xml, **kwargs)
+        return self.spawn_urdf(name, urdf_xml, **kwargs)
 
     def delete_model(self, name):
         """Remove a model; every other model keeps its state."""
@@ -398,19 +405,9 @@ class World:
         self.schedule_events()
 
     def command_velocity(self, name, linear_x, angular_z):
-        """
-        Command a diff-drive robot's body twist; it lapses after cmd_vel_timeout seconds.
-
-        Return the (linear_x, angular_z) carried out: DiffDrive.command() scales a command
-        that would turn a wheel rim faster than MAX_WHEEL_RIM_SPEED down to that speed.
-        """
-        drive = self._diff_drive(name)
-        linear_x = validation.finite_number(linear_x, 'linear_x')
-        angular_z = validation.finite_number(angular_z, 'angular_z')
-        applied = drive.command(linear_x, angular_z, self._cmd_vel_timeout)
-        self.schedule_events()
-        return applied
+        """Command a drive robot's body twist; return the twist its drive carries out."""
+        return self._diff_drive(name).command_velocity(linear_x, angular_z)
 
     def odometry(self, name):
-        """Return the odometry of a diff-drive robot, from its encoders or ground truth."""
+        """Return the odometry of a drive robot, from its encoders or ground truth."""
         return self._diff_drive(name).odometry()

@@ -5,7 +5,8 @@ A plugin module is named in KINDS below, by the Gazebo plugin it stands in for, 
 PLUGIN, a Plugin subclass. Loading a URDF calls PLUGIN.configure() on the block and
 PLUGIN.build() on the robot's spec; spawning the robot makes one PLUGIN(config, block) per
 block, and the world's step calls it through the methods of Plugin. Adding a kind touches this
-table and a new module, not the world.
+table and a new module, not the world. drive_config.py is no kind: it reads the parameters of
+the drives.
 """
 
 from dataclasses import dataclass
@@ -16,6 +17,7 @@ import math
 # A name that is part of another (gazebo_ros_imu) comes after it: kind_of() takes the first match.
 KINDS = {
     'gazebo_ros_diff_drive': 'service_tutorial.sim.plugins.diff_drive',
+    'gazebo_ros_skid_steer_drive': 'service_tutorial.sim.plugins.skid_steer',
     'gazebo_ros_laser': 'service_tutorial.sim.plugins.ray_sensor',
     'gazebo_ros_ray_sensor': 'service_tutorial.sim.plugins.ray_sensor',
     'gazebo_ros_camera': 'service_tutorial.sim.plugins.camera_sensor',
@@ -75,6 +77,8 @@ class Plugin:
     # Whether a robot may carry more than one plugin of this kind, and its name in refusals.
     single = True
     title = 'plugin'
+    # A drive takes velocity commands: command_velocity(), odometry(); a robot has one.
+    is_drive = False
 
     def __init__(self, config, block):
         """Keep the configuration parsed from the plugin's block, and the block itself."""

@@ -1,68 +1,25 @@
 """
 The Gazebo diff-drive plugin (gazebo_ros_diff_drive), simulation side.
 
-Its parameters, the wheel servos it puts on a robot, the kinematics, encoder odometry, and
-DiffDrive, the controller the world's step drives. Topic names are the ROS face's business:
-they stay in the plugin's raw block, readable with parameter().
+The wheel servos it puts on a robot, the kinematics, encoder odometry, and DiffDrive, the
+controller the world's step drives; drive_config.py reads its parameters in both
+generations' spellings. Topic names are the ROS face's business: they stay in the plugin's
+raw block, readable with drive_config.parameter().
 """
 
 from dataclasses import dataclass
-import logging
 import math
 
 import mujoco
 import numpy as np
 from service_tutorial.sim import frames
+from service_tutorial.sim import validation
 from service_tutorial.sim.plugins import Plugin
-from service_tutorial.sim.urdf.hardened_xml import parse_numbers
-from service_tutorial.sim.urdf.hardened_xml import UrdfError
+from service_tutorial.sim.plugins.drive_config import ODOMETRY_SOURCE_ENCODER
+from service_tutorial.sim.plugins.drive_config import read_diff_drive
 
-_logger = logging.getLogger(__name__)
-
-ODOMETRY_SOURCE_ENCODER = 0
-ODOMETRY_SOURCE_WORLD = 1
-# Fastest a diff drive turns a wheel's rim, in m/s; faster commands are scaled down to it.
+# Fastest a drive turns a wheel's rim, in m/s; faster commands are scaled down to it.
 MAX_WHEEL_RIM_SPEED = 10.0
-
-
-@dataclass(frozen=True)
-class DiffDriveConfig:
-    """
-    Settings of a gazebo_ros diff-drive plugin, in ROS 2 names and SI units.
-
-    Wheel joints are given in pairs; every left joint turns at the left wheel speed.
-    ROS 1 legacy mode is resolved while parsing by swapping the two joint lists.
-    """
-
-    left_joints: tuple
-    right_joints: tuple
-    wheel_separation: float = 0.34
-    wheel_diameter: float = 0.15
-    max_wheel_torque: float = 5.0
-    max_wheel_acceleration: float = 0.0  # m/s^2 at the wheel rim; 0 means unlimited
-    odometry_frame: str = 'odom'
-    robot_base_frame: str = 'base_footprint'
-    odometry_source: int = ODOMETRY_SOURCE_WORLD
-    publish_odom: bool = True
-    publish_odom_tf: bool = True
-    publish_wheel_tf: bool = False
-    update_rate: float = 100.0
-    legacy_mode: bool = False
-
-    @property
-    def wheel_radius(self):
-        """Return the wheel radius in metres."""
-        return self.wheel_diameter / 2.0
-
-    @property
-    def left_joint(self):
-        """Return the first left wheel joint, the one encoder odometry reads."""
-        return self.left_joints[0]
-
-    @property
-    def right_joint(self):
-        """Return the first right wheel joint, the one encoder odometry reads."""
-        return self.right_joints[0]
 
 
 @dataclass(frozen=True, eq=False)
@@ -136,122 +93,9 @@ def drive_actuator_name(joint_name):
     return joint_name + '_drive'
 
 
-# ROS 2 parameter name -> ROS 1 parameter name of gazebo_ros_diff_drive.
-_ROS1_NAMES = {
-    'left_joint': 'leftJoint',
-    'right_joint': 'rightJoint',
-    'wheel_separation': 'wheelSeparation',
-    'wheel_diameter': 'wheelDiameter',
-    'max_wheel_torque': 'wheelTorque',
-    'max_wheel_acceleration': 'wheelAcceleration',
-    'odometry_frame': 'odometryFrame',
-    'robot_base_frame': 'robotBaseFrame',
-    'odometry_source': 'odometrySource',
-    'command_topic': 'commandTopic',
-    'odometry_topic': 'odometryTopic',
-    'publish_odom_tf': 'publishOdomTF',
-    'publish_wheel_tf': 'publishWheelTF',
-    'update_rate': 'updateRate',
-}
-
-
-def is_ros1_block(block):
-    """Return True if a diff-drive block is written with gazebo_ros's ROS 1 parameter names."""
-    return 'leftJoint' in block.parameters or 'rightJoint' in block.parameters
-
-
-def parameter_texts(block, key):
-    """Return the texts of a diff-drive parameter, by its ROS 2 name, in either generation."""
-    return block.texts(_ROS1_NAMES.get(key, key) if is_ros1_block(block) else key)
-
-
-def parameter(block, key, default=None):
-    """Return the last text given for a diff-drive parameter such as command_topic, or default."""
-    values = parameter_texts(block, key)
-    return values[-1] if values else default
-
-
-def _number(block, key, default, minimum, inclusive):
-    value_text = parameter(block, key)
-    if value_text is None:
-        return default
-    value = parse_numbers(value_text, f'diff-drive <{key}>')
-    if len(value) != 1 or value[0] < minimum or (value[0] == minimum and not inclusive):
-        bound = '>=' if inclusive else '>'
-        raise UrdfError(f'diff-drive <{key}> must be one number {bound} {minimum}: '
-                        f"'{value_text}'")
-    return value[0]
-
-
-def _flag(block, key, default):
-    value_text = parameter(block, key)
-    if value_text is None:
-        return default
-    if value_text.lower() not in ('true', 'false', '1', '0'):
-        raise UrdfError(f"diff-drive <{key}> must be true or false: '{value_text}'")
-    return value_text.lower() in ('true', '1')
-
-
-def _wheel_joints(block, robot):
-    """Return the (left, right) wheel joint names of a block, checked against the robot."""
-    left_joints = parameter_texts(block, 'left_joint')
-    right_joints = parameter_texts(block, 'right_joint')
-    if not left_joints or not right_joints or len(left_joints) != len(right_joints):
-        raise UrdfError('diff-drive plugin needs as many <left_joint> as <right_joint>')
-    joints = {joint.name: joint for joint in robot.joints}
-    for name in left_joints + right_joints:
-        if name not in joints:
-            raise UrdfError(f"diff-drive wheel joint '{name}' is not a joint of the robot")
-        if joints[name].type not in ('continuous', 'revolute'):
-            raise UrdfError(f"diff-drive wheel joint '{name}' is {joints[name].type}, "
-                            'not continuous or revolute')
-    if len(set(left_joints + right_joints)) != 2 * len(left_joints):
-        raise UrdfError('diff-drive plugin names the same wheel joint twice')
-    return left_joints, right_joints
-
-
-def read_config(block, robot):
-    """Return the DiffDriveConfig of a diff-drive plugin block of a yourdfpy robot."""
-    left_joints, right_joints = _wheel_joints(block, robot)
-    source_text = parameter(block, 'odometry_source', '1').lower()
-    sources = {'0': ODOMETRY_SOURCE_ENCODER, 'encoder': ODOMETRY_SOURCE_ENCODER,
-               '1': ODOMETRY_SOURCE_WORLD, 'world': ODOMETRY_SOURCE_WORLD}
-    if source_text not in sources:
-        raise UrdfError(
-            f"diff-drive <odometry_source> must be 0 (encoder) or 1 (world): '{source_text}'")
-
-    legacy_mode = False
-    if is_ros1_block(block):
-        # gazebo_ros (ROS 1) swapped the wheels unless told <legacyMode>false</legacyMode>.
-        legacy_texts = block.parameters.get('legacyMode')
-        if not legacy_texts:
-            _logger.warning('ROS 1 diff-drive plugin has no <legacyMode>; like gazebo_ros it '
-                            'defaults to true and swaps the wheels. Add '
-                            '<legacyMode>false</legacyMode> unless the robot relies on that.')
-        legacy_mode = ((legacy_texts or ('',))[0] or 'true').strip().lower() in ('true', '1')
-        if legacy_mode:
-            left_joints, right_joints = right_joints, left_joints
-
-    return DiffDriveConfig(
-        left_joints=left_joints,
-        right_joints=right_joints,
-        wheel_separation=_number(block, 'wheel_separation', 0.34, 0.0, False),
-        wheel_diameter=_number(block, 'wheel_diameter', 0.15, 0.0, False),
-        max_wheel_torque=_number(block, 'max_wheel_torque', 5.0, 0.0, False),
-        max_wheel_acceleration=_number(block, 'max_wheel_acceleration', 0.0, 0.0, True),
-        odometry_frame=parameter(block, 'odometry_frame', 'odom'),
-        robot_base_frame=parameter(block, 'robot_base_frame', 'base_footprint'),
-        odometry_source=sources[source_text],
-        publish_odom=_flag(block, 'publish_odom', True),
-        publish_odom_tf=_flag(block, 'publish_odom_tf', True),
-        publish_wheel_tf=_flag(block, 'publish_wheel_tf', False),
-        update_rate=_number(block, 'update_rate', 100.0, 0.0, True),
-        legacy_mode=legacy_mode)
-
-
 def add_wheel_actuators(spec, config, timestep):
     """
-    Put a torque-limited velocity servo on every wheel joint.
+    Put a torque-limited velocity servo on every wheel joint, and free the joint of friction.
 
     The servo's activation is the wheel speed set point and its control input is the rate of
     change of that set point, which lets the drive ramp speeds at max_wheel_acceleration
@@ -263,25 +107,31 @@ def add_wheel_actuators(spec, config, timestep):
     armature (motor rotor inertia seen through the gearbox) equal to its share of the robot's
     mass seen at the rim, the usual inertia-matched motor sizing; that raises the gain until
     the wheel follows its set point within a few milliseconds, like a Gazebo joint motor.
+
+    Gazebo's joint motor and the joint's Coulomb friction share one constraint in ODE, and
+    the drive's motor replaces the friction: a driven wheel keeps its damping, not its
+    <dynamics friction>.
     """
     robot_mass = sum(body.mass for body in spec.bodies)
-    wheel_joints = config.left_joints + config.right_joints
-    armature = robot_mass * config.wheel_radius ** 2 / len(wheel_joints)
-    for joint_name in wheel_joints:
-        joint = spec.joint(joint_name)
-        joint.armature = armature
-        kv = (_inertia_about_axis(joint.parent, joint.axis) + armature) / timestep
-        actuator = spec.add_actuator(name=drive_actuator_name(joint_name), target=joint_name)
-        actuator.trntype = mujoco.mjtTrn.mjTRN_JOINT
-        actuator.dyntype = mujoco.mjtDyn.mjDYN_INTEGRATOR
-        actuator.gaintype = mujoco.mjtGain.mjGAIN_FIXED
-        actuator.gainprm[0] = kv
-        actuator.biastype = mujoco.mjtBias.mjBIAS_AFFINE
-        actuator.biasprm[:3] = [0.0, 0.0, -kv]
-        actuator.forcelimited = mujoco.mjtLimited.mjLIMITED_TRUE
-        actuator.forcerange = [-config.max_wheel_torque, config.max_wheel_torque]
-        actuator.ctrllimited = mujoco.mjtLimited.mjLIMITED_FALSE
-        actuator.actlimited = mujoco.mjtLimited.mjLIMITED_FALSE
+    pairs = config.wheel_pairs()
+    for left, right, _, diameter in pairs:
+        for joint_name in (left, right):
+            joint = spec.joint(joint_name)
+            joint.frictionloss = 0.0
+            joint.armature = robot_mass * (diameter / 2.0) ** 2 / (2 * len(pairs))
+            kv = (_inertia_about_axis(joint.parent, joint.axis) + joint.armature) / timestep
+            actuator = spec.add_actuator(name=drive_actuator_name(joint_name),
+                                         target=joint_name)
+            actuator.trntype = mujoco.mjtTrn.mjTRN_JOINT
+            actuator.dyntype = mujoco.mjtDyn.mjDYN_INTEGRATOR
+            actuator.gaintype = mujoco.mjtGain.mjGAIN_FIXED
+            actuator.gainprm[0] = kv
+            actuator.biastype = mujoco.mjtBias.mjBIAS_AFFINE
+            actuator.biasprm[:3] = [0.0, 0.0, -kv]
+            actuator.forcelimited = mujoco.mjtLimited.mjLIMITED_TRUE
+            actuator.forcerange = [-config.max_wheel_torque, config.max_wheel_torque]
+            actuator.ctrllimited = mujoco.mjtLimited.mjLIMITED_FALSE
+            actuator.actlimited = mujoco.mjtLimited.mjLIMITED_FALSE
 
 
 def _inertia_about_axis(body, axis):
@@ -294,32 +144,41 @@ def _inertia_about_axis(body, axis):
 
 class DiffDrive(Plugin):
     """
-    A robot's diff drive at run time: wheel set points, command timeout, odometry.
+    A robot's drive at run time: wheel set points, command timeout, odometry.
 
     Wheel speeds are servo set points held in the actuators' activations; a ramp at the
     acceleration limit runs in MuJoCo by itself, and the drive only acts at its events: a
-    ramp's end and the lapse of a command.
+    ramp's end and the lapse of a command. The ROS face uses command_velocity(), odometry()
+    and the config's odometry_frame, robot_base_frame, publish_* flags, update_rate and
+    covariance; every drive kind offers the same.
     """
 
     title = 'diff-drive'
+    is_drive = True
 
     def __init__(self, config, block):
         """Start at rest, with no command and odometry at the origin."""
         super().__init__(config, block)
-        wheel_count = len(config.left_joints) + len(config.right_joints)
-        self.acceleration = config.max_wheel_acceleration / config.wheel_radius  # rad/s^2
-        self.targets = np.zeros(wheel_count)
-        self.ramp_end = np.full(wheel_count, math.inf)
+        pairs = config.wheel_pairs()
+        # Per wheel, lefts first: which side (-1 left, +1 right), half the pair's
+        # separation, and the wheel's radius.
+        self._sides = np.repeat([-1.0, 1.0], len(pairs))
+        self._half_separations = np.tile([separation / 2.0 for _, _, separation, _ in pairs], 2)
+        self._radii = np.tile([diameter / 2.0 for _, _, _, diameter in pairs], 2)
+        self._joints = config.left_joints + config.right_joints
+        self.acceleration = config.max_wheel_acceleration / self._radii  # rad/s^2, per wheel
+        self.targets = np.zeros(len(self._joints))
+        self.ramp_end = np.full(len(self._joints), math.inf)
         self.expiry = math.inf
         self.commanded_at = None  # simulation time of the command in force, if there is one
-        self.encoder = EncoderOdometry(config.wheel_separation, config.wheel_radius)
+        self.encoder = EncoderOdometry(pairs[0][2], pairs[0][3] / 2.0)
         self.origin_position = np.zeros(3)
         self.origin_orientation = np.array(frames.IDENTITY_QUATERNION)
 
     @classmethod
     def configure(cls, block, robot):
-        """Return the DiffDriveConfig of a diff-drive block (see read_config)."""
-        return read_config(block, robot)
+        """Return the DiffDriveConfig of a diff-drive block, in either spelling."""
+        return read_diff_drive(block, robot)
 
     @classmethod
     def build(cls, spec, config, timestep):
@@ -332,7 +191,7 @@ class DiffDrive(Plugin):
         mj_model, config = world.model, self.config
         self._actuator_ids = np.array(
             [mj_model.actuator(model.scoped(drive_actuator_name(joint))).id
-             for joint in config.left_joints + config.right_joints], dtype=int)
+             for joint in self._joints], dtype=int)
         self._act_adr = mj_model.actuator_actadr[self._actuator_ids].astype(int)
         base_link = config.robot_base_frame
         if base_link not in model.description.links:
@@ -347,30 +206,30 @@ class DiffDrive(Plugin):
         """Return when the next ramp ends or the command lapses."""
         return min(self.expiry, float(self.ramp_end.min()))
 
-    def command(self, linear_x, angular_z, timeout):
+    def command_velocity(self, linear_x, angular_z):
         """
-        Drive at a body twist until timeout seconds pass (0: forever); return what is done.
+        Drive at a body twist until the world's cmd_vel_timeout lapses; return what is done.
 
         A command that would turn a wheel rim faster than MAX_WHEEL_RIM_SPEED is scaled down
-        to that speed, keeping the radius of the turn.
+        to that speed, keeping the radius of the turn. NaN or infinity is refused.
         """
-        config = self.config
+        linear_x = validation.finite_number(linear_x, 'linear_x')
+        angular_z = validation.finite_number(angular_z, 'angular_z')
         # Scale before the wheel speeds are worked out, so that no sum of huge values overflows.
-        fastest_rim = max(abs(linear_x), abs(angular_z) * config.wheel_separation / 2.0)
+        fastest_rim = max(abs(linear_x), abs(angular_z) * float(self._half_separations.max()))
         if fastest_rim > MAX_WHEEL_RIM_SPEED:
             scale = MAX_WHEEL_RIM_SPEED / fastest_rim
             linear_x, angular_z = linear_x * scale, angular_z * scale
-        left, right = wheel_speeds(linear_x, angular_z, config.wheel_separation,
-                                   config.wheel_radius)
-        fastest_wheel = max(abs(left), abs(right)) * config.wheel_radius
-        if fastest_wheel > MAX_WHEEL_RIM_SPEED:
-            scale = MAX_WHEEL_RIM_SPEED / fastest_wheel
-            linear_x, angular_z = linear_x * scale, angular_z * scale
-            left, right = left * scale, right * scale
+        rims = linear_x + self._sides * angular_z * self._half_separations
+        fastest_rim = float(np.abs(rims).max())
+        if fastest_rim > MAX_WHEEL_RIM_SPEED:
+            scale = MAX_WHEEL_RIM_SPEED / fastest_rim
+            linear_x, angular_z, rims = linear_x * scale, angular_z * scale, rims * scale
         self._update_encoder()
-        self._set_wheel_targets(left, right)
+        self._set_wheel_targets(rims / self._radii)
         self.commanded_at = self.world.data.time
-        self.set_timeout(timeout)
+        self.set_timeout(self.world.cmd_vel_timeout)
+        self.world.schedule_events()
         return linear_x, angular_z
 
     def set_timeout(self, timeout):
@@ -378,7 +237,7 @@ class DiffDrive(Plugin):
         if self.commanded_at is not None:
             self.expiry = self.commanded_at + timeout if timeout > 0.0 else math.inf
 
-    def _set_wheel_targets(self, left, right):
+    def _set_wheel_targets(self, speeds):
         """
         Set wheel speed set points, ramped at the drive's acceleration limit if it has one.
 
@@ -386,19 +245,18 @@ class DiffDrive(Plugin):
         of change, so a ramp needs no work between its start and its end.
         """
         data, timestep = self.world.data, self.world.timestep
-        half = len(self.targets) // 2
-        self.targets[:half] = left
-        self.targets[half:] = right
+        self.targets[:] = speeds
         for index, (actuator, act) in enumerate(zip(self._actuator_ids, self._act_adr)):
             change = self.targets[index] - data.act[act]
-            ramp_steps = (math.floor(abs(change) / (self.acceleration * timestep))
-                          if self.acceleration > 0.0 else 0)
+            acceleration = self.acceleration[index]
+            ramp_steps = (math.floor(abs(change) / (acceleration * timestep))
+                          if acceleration > 0.0 else 0)
             if ramp_steps == 0:
                 data.act[act] = self.targets[index]
                 data.ctrl[actuator] = 0.0
                 self.ramp_end[index] = math.inf
             else:
-                data.ctrl[actuator] = math.copysign(self.acceleration, change)
+                data.ctrl[actuator] = math.copysign(acceleration, change)
                 self.ramp_end[index] = data.time + ramp_steps * timestep
 
     def update(self, now):
@@ -410,7 +268,7 @@ class DiffDrive(Plugin):
             self.ramp_end[index] = math.inf
         if self.expiry <= now:
             self._update_encoder()
-            self._set_wheel_targets(0.0, 0.0)
+            self._set_wheel_targets(np.zeros(len(self.targets)))
             self.expiry = math.inf
             self.commanded_at = None
 
@@ -434,15 +292,15 @@ class DiffDrive(Plugin):
         self.encoder.update(*(qpos[address] for address in self._wheel_qpos_adr))
 
     def odometry(self):
-        """Return the robot's odometry, from its wheel encoders or from ground truth."""
+        """Return the robot's odometry, from its first pair's encoders or from ground truth."""
         config = self.config
         if config.odometry_source == ODOMETRY_SOURCE_ENCODER:
             self._update_encoder()
             encoder = self.encoder
             qvel = self.world.data.qvel
             linear_x, angular_z = body_velocity(
-                *(qvel[address] for address in self._wheel_dof_adr), config.wheel_separation,
-                config.wheel_radius)
+                *(qvel[address] for address in self._wheel_dof_adr), encoder.wheel_separation,
+                encoder.wheel_radius)
             return Odometry(
                 position=np.array([encoder.x, encoder.y, 0.0]),
                 orientation=frames.yaw_quaternion(encoder.yaw),

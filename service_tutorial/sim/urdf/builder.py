@@ -15,7 +15,10 @@ import mujoco
 import numpy as np
 from service_tutorial.sim import frames
 from service_tutorial.sim import plugins
-from service_tutorial.sim.urdf.gazebo import read_link_friction
+from service_tutorial.sim.urdf.gazebo import gazebo_colour
+from service_tutorial.sim.urdf.gazebo import LinkSettings
+from service_tutorial.sim.urdf.gazebo import plugin_filenames
+from service_tutorial.sim.urdf.gazebo import read_link_settings
 from service_tutorial.sim.urdf.gazebo import read_plugin_blocks
 from service_tutorial.sim.urdf.gazebo import read_sensor_plugin_blocks
 from service_tutorial.sim.urdf.hardened_xml import check_structure
@@ -34,6 +37,7 @@ COLLISION_RGBA = (0.5, 0.2, 0.2, 0.5)
 # only hundredths of a millimetre into the floor and rolls with its true radius.
 CONTACT_TIME_CONSTANT = 0.005
 DIFF_DRIVE = 'gazebo_ros_diff_drive'
+NO_LINK_SETTINGS = LinkSettings()
 
 
 @dataclass(frozen=True)
@@ -57,6 +61,9 @@ class RobotDescription:
     actuators: tuple = ()
     plugins: tuple = ()  # a plugins.PluginSetup for each <plugin> of a registered kind
     mesh_files: tuple = ()
+    missing_meshes: tuple = ()  # mesh filenames as written that could not be had, left out
+    ignored_plugins: tuple = ()  # <plugin> filenames of kinds not simulated here
+    notes: tuple = ()  # what a user should know about how the robot was built, one line each
 
     def plugin_config(self, kind):
         """Return the configuration of the robot's first plugin of a kind, or None."""
@@ -90,20 +97,48 @@ def load_urdf(model_xml, *, base_dir=None, package_resolver=None, timestep=0.002
         raise UrdfError(f'model_xml is not valid URDF: {error}') from None
     if not urdf.validate():
         raise UrdfError(f'model_xml is not valid URDF: {urdf.errors[0].msg}')
-    builder = _SpecBuilder(urdf.robot, base_dir, package_resolver, read_link_friction(root))
+    builder = _SpecBuilder(urdf.robot, base_dir, package_resolver, read_link_settings(root),
+                           timestep)
     description = builder.build()
-    setups = _plugin_setups(read_plugin_blocks(root) + read_sensor_plugin_blocks(root),
-                            urdf.robot)
+    setups, plugin_notes = _plugin_setups(
+        read_plugin_blocks(root) + read_sensor_plugin_blocks(root), urdf.robot)
     for setup in setups:
         plugins.plugin_class(setup.kind).build(description.spec, setup.config, timestep)
+    missing = _missing_meshes(root, builder.meshes.missing)
+    ignored = _unique(filename for filename in plugin_filenames(root)
+                      if filename and plugins.kind_of(filename) is None)
+    notes = ([f"mesh '{filename}' cannot be had, so it is left out: {reason}"
+              for filename, reason in missing]
+             + builder.notes + [f"plugin '{filename}' is not simulated here; it is ignored"
+                                for filename in ignored] + plugin_notes)
     return dataclasses.replace(
         description, plugins=setups,
-        actuators=tuple(actuator.name for actuator in description.spec.actuators))
+        actuators=tuple(actuator.name for actuator in description.spec.actuators),
+        missing_meshes=tuple(filename for filename, _ in missing), ignored_plugins=ignored,
+        notes=tuple(notes))
+
+
+def _unique(items):
+    """Return the items without repeats, in the order they first come."""
+    return tuple(dict.fromkeys(items))
+
+
+def _missing_meshes(root, missing):
+    """Return (filename, reason) of each missing mesh once, in the order the URDF names them."""
+    reasons = {}
+    for filename, reason in missing:
+        reasons.setdefault(filename, reason)
+    written = _unique(mesh.get('filename') for mesh in root.iter('mesh'))
+    return [(filename, reasons[filename]) for filename in written if filename in reasons]
 
 
 def _plugin_setups(blocks, robot):
-    """Configure every plugin block of a registered kind; refuse a second of a single kind."""
-    setups = []
+    """
+    Configure every plugin block of a registered kind; return the setups and their notes.
+
+    A robot may carry one plugin of a single kind, and one drive of any kind.
+    """
+    setups, notes = [], []
     for block in blocks:
         kind = plugins.kind_of(block.filename)
         if kind is None:
@@ -111,8 +146,13 @@ def _plugin_setups(blocks, robot):
         plugin = plugins.plugin_class(kind)
         if plugin.single and any(setup.kind == kind for setup in setups):
             raise UrdfError(f'model_xml carries more than one {plugin.title} plugin')
-        setups.append(plugins.PluginSetup(kind, block, plugin.configure(block, robot)))
-    return tuple(setups)
+        if plugin.is_drive and any(plugins.plugin_class(setup.kind).is_drive
+                                   for setup in setups):
+            raise UrdfError(f'model_xml carries a {plugin.title} plugin besides another drive')
+        config = plugin.configure(block, robot)
+        notes.extend(getattr(config, 'notes', ()))
+        setups.append(plugins.PluginSetup(kind, block, config))
+    return tuple(setups), notes
 
 
 def _pose(matrix, what):
@@ -128,9 +168,15 @@ def _pose(matrix, what):
 class _SpecBuilder:
     """Walks a yourdfpy robot from its root link and adds MuJoCo bodies for every link."""
 
-    def __init__(self, robot, base_dir, package_resolver, friction):
+    def __init__(self, robot, base_dir, package_resolver, link_settings, timestep):
         self._robot = robot
-        self._friction = friction
+        self._link_settings = link_settings
+        self._timestep = timestep
+        masses = [float(link.inertial.mass) for link in robot.links
+                  if link.inertial is not None and link.inertial.mass is not None]
+        # Bad masses are refused link by link later; here they only must not spoil the sum.
+        self._robot_mass = sum(mass for mass in masses if math.isfinite(mass) and mass > 0.0)
+        self._robot_mass = min(self._robot_mass, 1e12) or 1.0
         self._links = {link.name: link for link in robot.links}
         self._materials = {material.name: material for material in robot.materials
                            if material.name}
@@ -138,7 +184,9 @@ class _SpecBuilder:
         self._spec.compiler.degree = False
         self._spec.compiler.inertiafromgeom = mujoco.mjtInertiaFromGeom.mjINERTIAFROMGEOM_FALSE
         self._spec.strippath = False
-        self._meshes = MeshLoader(self._spec, base_dir, package_resolver)
+        self.meshes = MeshLoader(self._spec, base_dir, package_resolver)
+        self.notes = []  # what the user should know about how the links were built
+        self._collides = []  # (link name, selfCollide) of every link with a collision geom
 
     def build(self):
         """Return the finished spec and what a world needs to know about it."""
@@ -208,10 +256,12 @@ class _SpecBuilder:
             raise UrdfError(f"joints form a loop: links {', '.join(unreached)} are not "
                             f"reached from root link '{root}'")
         links = tuple(name for name in self._links if name != WORLD_LINK)
+        self._keep_links_apart()
+        self.notes.extend(self.meshes.left_out)
         return RobotDescription(
             robot_name=robot.name, spec=self._spec, root_link=root, anchored=anchored,
             root_position=root_position, root_orientation=root_orientation, links=links,
-            joints=tuple(joint_names), mesh_files=tuple(self._meshes.files))
+            joints=tuple(joint_names), mesh_files=tuple(self.meshes.files))
 
     def _add_joint(self, body, joint):
         axis = np.asarray(joint.axis if joint.axis is not None else (1.0, 0.0, 0.0), float)
@@ -249,29 +299,80 @@ class _SpecBuilder:
 
     def _fill_link(self, body, link_name):
         link = self._links[link_name]
+        settings = self._link_settings.get(link_name, NO_LINK_SETTINGS)
         self._set_inertia(body, link)
+        if not settings.gravity:
+            # MuJoCo's gravity compensation: a force that holds the body's weight.
+            body.gravcomp = 1.0
+        colour = self._gazebo_colour(settings.material, link_name)
         for visual in link.visuals:
             geom = self._add_geom(body, visual.geometry, visual.origin, link_name)
-            if geom.type == mujoco.mjtGeom.mjGEOM_MESH:
-                # Visual meshes are often open surfaces; they carry no mass here anyway.
-                self._spec.mesh(geom.meshname).inertia = mujoco.mjtMeshInertia.mjMESH_INERTIA_SHELL
+            if geom is None:
+                continue
             geom.contype = 0
             geom.conaffinity = 0
             geom.group = VISUAL_GROUP
-            geom.rgba = self._visual_rgba(visual, link_name)
-        mu = self._friction.get(link_name)
+            geom.rgba = colour if colour is not None else self._visual_rgba(visual, link_name)
+        solref = self._contact_solref(settings)
         for collision in link.collisions:
-            geom = self._add_geom(body, collision.geometry, collision.origin, link_name)
+            geom = self._add_geom(body, collision.geometry, collision.origin, link_name,
+                                  collision=True)
+            if geom is None:
+                continue
             geom.group = COLLISION_GROUP
             geom.rgba = COLLISION_RGBA
-            geom.solref = [CONTACT_TIME_CONSTANT, 1.0]
-            if mu is not None:
+            geom.solref = solref
+            if settings.mu is not None:
                 # ODE combines the friction of two surfaces with min(); MuJoCo takes the
                 # higher-priority geom's, so the link's own setting wins over the floor's.
                 geom.priority = 1
-                geom.friction[0] = min(mu)
-                if max(mu) == 0.0:
+                geom.friction[0] = min(settings.mu)
+                if max(settings.mu) == 0.0:
                     geom.condim = 1
+            if not self._collides or self._collides[-1][0] != link_name:
+                self._collides.append((link_name, settings.self_collide))
+
+    def _gazebo_colour(self, material, link_name):
+        """Return the colour a <gazebo> material gives a link's visuals, or None."""
+        if material is None:
+            return None
+        colour = gazebo_colour(material)
+        if colour is None:
+            self.notes.append(f"link '{link_name}' material '{material}' is not one of "
+                              "Gazebo's flat colours; the URDF colour is kept")
+        return colour
+
+    def _contact_solref(self, settings):
+        """
+        Return the MuJoCo solref of a link's contacts: the world's, or from <kp> and <kd>.
+
+        Gazebo's kp is a stiffness in N/m; MuJoCo's contact is a mass-spring-damper with a
+        time constant. Taken against the whole robot's mass, 2 pi sqrt(mass / kp) gives the
+        robot resting on that link the sinking it has in Gazebo, weight / kp. The damping
+        ratio from kd is at least 1, as ODE's implicit step damps a contact at least that
+        much. The time constant is at least two timesteps, below which MuJoCo's contacts are
+        unstable.
+        """
+        if settings.kp is None:
+            return [CONTACT_TIME_CONSTANT, 1.0]
+        time_constant = max(2.0 * math.pi * math.sqrt(self._robot_mass / settings.kp),
+                            2.0 * self._timestep)
+        damping_ratio = 1.0
+        if settings.kd is not None:
+            critical = 2.0 * math.sqrt(settings.kp * self._robot_mass)
+            damping_ratio = max(1.0, settings.kd / critical)
+        return [time_constant, damping_ratio]
+
+    def _keep_links_apart(self):
+        """
+        Keep the robot's links from colliding with each other, as Gazebo does.
+
+        Two links of one model collide only if both set <selfCollide> true.
+        """
+        for index, (first, first_collides) in enumerate(self._collides):
+            for second, second_collides in self._collides[index + 1:]:
+                if not (first_collides and second_collides):
+                    self._spec.add_exclude(bodyname1=first, bodyname2=second)
 
     def _set_inertia(self, body, link):
         inertial = link.inertial
@@ -300,9 +401,15 @@ class _SpecBuilder:
         body.iquat = principal
         body.inertia = moments
 
-    def _add_geom(self, body, geometry, origin, link_name):
+    def _add_geom(self, body, geometry, origin, link_name, collision=False):
+        """Add a link's geometry to its body; return the geom, or None if it is left out."""
         what = f"link '{link_name}'"
         position, orientation = _pose(origin, f'{what} geometry')
+        mesh_name = None
+        if geometry.mesh is not None:
+            mesh_name = self.meshes.add(geometry.mesh, what, collision=collision)
+            if mesh_name is None:
+                return None
         geom = body.add_geom(pos=position, quat=orientation)
         if geometry.box is not None:
             size = np.asarray(geometry.box.size, dtype=float)
@@ -319,8 +426,7 @@ class _SpecBuilder:
             self._check_size(size, 1, f'{what} sphere radius')
             geom.type = mujoco.mjtGeom.mjGEOM_SPHERE
             geom.size = [size[0], 0.0, 0.0]
-        elif geometry.mesh is not None:
-            mesh_name = self._meshes.add(geometry.mesh, what)
+        elif mesh_name is not None:
             geom.type = mujoco.mjtGeom.mjGEOM_MESH
             geom.meshname = mesh_name
         else:

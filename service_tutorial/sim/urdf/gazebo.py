@@ -1,5 +1,5 @@
 """
-The <gazebo> extension blocks of a URDF: per-link surface settings, plugin and sensor blocks.
+The <gazebo> extension blocks of a URDF: per-link settings, plugin and sensor blocks.
 
 A plugin block is kept as written (its parameters, its <ros> settings): the plugin module
 parses what the simulation needs, and a ROS face reads its topic settings from the same block.
@@ -16,6 +16,51 @@ import numpy as np
 from service_tutorial.sim.urdf.hardened_xml import parse_numbers
 from service_tutorial.sim.urdf.hardened_xml import UrdfError
 from service_tutorial.sim.validation import quoted
+
+# The flat colours of Gazebo's own materials (gazebo-classic media/materials/scripts/
+# gazebo.material), as the diffuse RGBA each gives a visual. Gazebo/SkyBlue's diffuse colour
+# is plain blue; its sky blue is the ambient one, used here. Textured materials (Wood,
+# Bricks...) have no flat colour and are not in the table.
+GAZEBO_COLOURS = {
+    'Gazebo/Grey': (0.7, 0.7, 0.7, 1.0),
+    'Gazebo/DarkGrey': (0.175, 0.175, 0.175, 1.0),
+    'Gazebo/White': (1.0, 1.0, 1.0, 1.0),
+    'Gazebo/FlatBlack': (0.1, 0.1, 0.1, 1.0),
+    'Gazebo/Black': (0.0, 0.0, 0.0, 1.0),
+    'Gazebo/Red': (1.0, 0.0, 0.0, 1.0),
+    'Gazebo/RedBright': (0.87, 0.26, 0.07, 1.0),
+    'Gazebo/Green': (0.0, 1.0, 0.0, 1.0),
+    'Gazebo/Blue': (0.0, 0.0, 1.0, 1.0),
+    'Gazebo/SkyBlue': (0.13, 0.44, 0.70, 1.0),
+    'Gazebo/Yellow': (1.0, 1.0, 0.0, 1.0),
+    'Gazebo/ZincYellow': (0.9725, 0.9529, 0.2078, 1.0),
+    'Gazebo/Purple': (1.0, 0.0, 1.0, 1.0),
+    'Gazebo/Turquoise': (0.0, 1.0, 1.0, 1.0),
+    'Gazebo/Orange': (1.0, 0.5088, 0.0468, 1.0),
+    'Gazebo/Gold': (0.8, 0.64869, 0.120759, 1.0),
+    'Gazebo/Pioneer2Body': (0.681193, 0.000923, 0.000923, 1.0),
+    'Gazebo/WhiteGlow': (1.0, 1.0, 1.0, 1.0),
+    'Gazebo/RedGlow': (1.0, 0.0, 0.0, 1.0),
+    'Gazebo/GreenGlow': (0.0, 1.0, 0.0, 1.0),
+    'Gazebo/BlueGlow': (0.0, 0.0, 1.0, 1.0),
+    'Gazebo/YellowGlow': (1.0, 1.0, 0.0, 1.0),
+    'Gazebo/PurpleGlow': (1.0, 0.0, 1.0, 1.0),
+    'Gazebo/TurquoiseGlow': (0.0, 1.0, 1.0, 1.0),
+    'Gazebo/GreyTransparent': (0.5, 0.5, 0.5, 0.5),
+    'Gazebo/RedTransparent': (1.0, 0.0, 0.0, 0.5),
+    'Gazebo/GreenTransparent': (0.0, 1.0, 0.0, 0.5),
+    'Gazebo/BlueTransparent': (0.0, 0.0, 1.0, 0.5),
+    'Gazebo/YellowTransparent': (1.0, 1.0, 0.0, 0.5),
+    'Gazebo/OrangeTransparent': (1.0, 0.44, 0.0, 0.4),
+}
+# Names written in robot files that Gazebo itself does not define, taken as the one meant.
+GAZEBO_COLOUR_ALIASES = {'Gazebo/Gray': 'Gazebo/Grey', 'Gazebo/DarkGray': 'Gazebo/DarkGrey',
+                         'Gazebo/GrayTransparent': 'Gazebo/GreyTransparent'}
+
+
+def gazebo_colour(material):
+    """Return the RGBA of a Gazebo material name such as Gazebo/Red, or None if unknown."""
+    return GAZEBO_COLOURS.get(GAZEBO_COLOUR_ALIASES.get(material, material))
 
 
 @dataclass(frozen=True)
@@ -167,31 +212,80 @@ def _sensor_block(element, link):
         values=types.MappingProxyType(values))
 
 
+def plugin_filenames(root):
+    """Return the filename of every <plugin> in any <gazebo> block, sensors' included."""
+    return tuple((plugin.get('filename') or '').strip()
+                 for gazebo in root.findall('gazebo') for plugin in gazebo.iter('plugin'))
+
+
 def _stripped_texts(element, tag):
     return tuple((child.text or '').strip() for child in element.findall(tag))
 
 
-def read_link_friction(root):
-    """Return {link: (mu1, mu2)} from <gazebo reference="link"> blocks."""
-    friction = {}
+@dataclass(frozen=True)
+class LinkSettings:
+    """What the <gazebo reference="link"> blocks of one link set, None where they are silent."""
+
+    mu: tuple = None  # (mu1, mu2): Coulomb friction along the two contact directions
+    kp: float = None  # contact stiffness, N/m
+    kd: float = None  # contact damping, N s/m
+    material: str = None  # a Gazebo material name such as Gazebo/Red
+    self_collide: bool = False  # collides with the robot's other links
+    gravity: bool = True  # feels gravity
+
+
+# Tag -> (LinkSettings field, kind of value). turnGravityOff is the old spelling of gravity.
+_LINK_TAGS = {'mu1': 'friction', 'mu2': 'friction', 'kp': 'stiffness', 'kd': 'friction',
+              'material': 'text', 'selfCollide': 'flag', 'gravity': 'flag',
+              'turnGravityOff': 'flag'}
+
+
+def read_link_settings(root):
+    """Return {link name: LinkSettings} from the <gazebo reference="link"> blocks."""
     link_names = {link.get('name') for link in root.findall('link')}
+    values = {}
     for block in root.findall('gazebo'):
         reference = block.get('reference')
         if reference is None or reference not in link_names:
             continue
-        values = {}
-        for key in ('mu1', 'mu2'):
-            element = block.find(key)
+        found = values.setdefault(reference, {})
+        for tag, kind in _LINK_TAGS.items():
+            element = block.find(tag)
             if element is None:
                 continue
             text = element.get('value') if element.get('value') is not None else element.text
-            value = parse_numbers(text or '', f"gazebo <{key}> of link '{reference}'")
-            if len(value) != 1 or value[0] < 0.0:
-                raise UrdfError(
-                    f"gazebo <{key}> of link '{reference}' must be one number >= 0: '{text}'")
-            values[key] = value[0]
-        if values:
-            mu1 = values.get('mu1', values.get('mu2'))
-            mu2 = values.get('mu2', mu1)
-            friction[reference] = (mu1, mu2)
-    return friction
+            what = f'gazebo <{tag}> of link {quoted(reference)}'
+            found[tag] = _link_value(text or '', kind, what)
+    settings = {}
+    for link, found in values.items():
+        if not found:
+            continue
+        mu = None
+        if 'mu1' in found or 'mu2' in found:
+            mu1 = found.get('mu1', found.get('mu2'))
+            mu = (mu1, found.get('mu2', mu1))
+        gravity = found.get('gravity', True)
+        if found.get('turnGravityOff'):
+            gravity = False
+        settings[link] = LinkSettings(
+            mu=mu, kp=found.get('kp'), kd=found.get('kd'), material=found.get('material'),
+            self_collide=found.get('selfCollide', False), gravity=gravity)
+    return settings
+
+
+def _link_value(text, kind, what):
+    """Return the value of one per-link tag, refusing what Gazebo could not use."""
+    if kind == 'text':
+        return text.strip()
+    if kind == 'flag':
+        value = text.strip().lower()
+        if value not in ('true', 'false', '1', '0'):
+            raise UrdfError(f'{what} must be true or false: {quoted(text)}')
+        return value in ('true', '1')
+    value = parse_numbers(text, what)
+    if kind == 'stiffness':
+        if len(value) != 1 or value[0] <= 0.0:
+            raise UrdfError(f'{what} must be one number > 0: {quoted(text)}')
+    elif len(value) != 1 or value[0] < 0.0:
+        raise UrdfError(f'{what} must be one number >= 0: {quoted(text)}')
+    return value[0]

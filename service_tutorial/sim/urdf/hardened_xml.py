@@ -19,42 +19,45 @@ class UrdfError(ValueError):
     """A URDF the loader refuses; the message names the cause and the offending value."""
 
 
-def parse_hardened(text, what='model_xml'):
-    """Parse XML text or bytes with a hardened parser (no DTD, no entities); return the root."""
-    data = text.encode('utf-8') if isinstance(text, str) else bytes(text)
-    if len(data) > MAX_MODEL_XML_BYTES:
-        raise UrdfError(
-            f'{what} is {len(data)} bytes, more than the limit of {MAX_MODEL_XML_BYTES}')
-    if not data.strip():
-        raise UrdfError(f'{what} is empty')
-    if b'\x00' in data:
-        # UTF-16 or UTF-32 text would slip past the byte scan for a DOCTYPE below.
-        raise UrdfError(f'{what} must be UTF-8 text')
-    # A DTD is the only way to declare entities; refusing it outright means nothing is
-    # ever fetched or expanded, whatever the parser would have done.
-    if b'<!DOCTYPE' in data or b'<!ENTITY' in data:
-        raise UrdfError(f'{what} contains a DOCTYPE or ENTITY declaration, which is refused')
-    parser = etree.XMLParser(
-        resolve_entities=False, no_network=True, load_dtd=False, dtd_validation=False,
-        huge_tree=False, remove_comments=True, remove_pis=True)
-    try:
-        root = etree.fromstring(data, parser)
-    except (etree.XMLSyntaxError, ValueError) as error:
-        raise UrdfError(f'{what} does not parse as XML: {error}') from None
-    if root.getroottree().docinfo.doctype:
-        raise UrdfError(f'{what} contains a DOCTYPE declaration, which is refused')
-    return root
-
-
 def parse_model_xml(model_xml):
     """Parse model_xml with a hardened parser and return the <robot> root element."""
-    root = parse_hardened(model_xml)
+    data = model_xml.encode('utf-8') if isinstance(model_xml, str) else bytes(model_xml)
+    if len(data) > MAX_MODEL_XML_BYTES:
+        raise UrdfError(
+            f'model_xml is {len(data)} bytes, more than the limit of {MAX_MODEL_XML_BYTES}')
+    if not data.strip():
+        raise UrdfError('model_xml is empty')
+    if b'\x00' in data:
+        # UTF-16 or UTF-32 text would slip past the byte scan for a DOCTYPE below.
+        raise UrdfError('model_xml must be UTF-8 text')
+    root = parse_xml(data, 'model_xml')
     tag = etree.QName(root).localname
     if tag != 'robot' or etree.QName(root).namespace:
         raise UrdfError(f'model_xml is not URDF: root element is <{tag}>')
     for element in root.iter():
         if isinstance(element.tag, str) and etree.QName(element).namespace == XACRO_NAMESPACE:
             raise UrdfError('model_xml contains xacro macros; run xacro on it first')
+    return root
+
+
+def parse_xml(data, what, *, huge_tree=False):
+    """
+    Parse XML bytes from an untrusted source and return the root element.
+
+    A DTD is the only way to declare entities; refusing it outright means nothing is ever
+    fetched or expanded, whatever a later parser of the same bytes would have done.
+    """
+    if b'<!DOCTYPE' in data or b'<!ENTITY' in data:
+        raise UrdfError(f'{what} contains a DOCTYPE or ENTITY declaration, which is refused')
+    parser = etree.XMLParser(
+        resolve_entities=False, no_network=True, load_dtd=False, dtd_validation=False,
+        huge_tree=huge_tree, remove_comments=True, remove_pis=True)
+    try:
+        root = etree.fromstring(data, parser)
+    except (etree.XMLSyntaxError, ValueError) as error:
+        raise UrdfError(f'{what} does not parse as XML: {error}') from None
+    if root.getroottree().docinfo.doctype:
+        raise UrdfError(f'{what} contains a DOCTYPE declaration, which is refused')
     return root
 
 
