@@ -34,6 +34,7 @@ setup(
             'reset_simulation_client = service_tutorial.reset_simulation_client:main',
             'turning_demo = service_tutorial.turning_demo:main',
             'save_snapshot = service_tutorial.save_snapshot:main',
+            'sensor_pictures = service_tutorial.sensor_pictures:main',
         ],
     },
 )

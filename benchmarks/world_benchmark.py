@@ -12,6 +12,8 @@ as JSON (output/benchmark.json unless --json says otherwise). What runs where:
   them, observed from this process;
 - raw physics and core operations: service_tutorial.sim.world.World in this process, no ROS;
 - the camera's cost: mujoco_world as a process, streaming to a subscriber here;
+- the sensors' cost: a scan and a robot camera frame in a World in this process against bare
+  MuJoCo calls, and mujoco_world as a process with and without a subscriber to a laser;
 - answers that need no simulation: model_services without a world, and robot_turning_server
   in this process.
 
@@ -90,6 +92,8 @@ class Config:
     step_rounds: int = 5                   # World.step against bare mj_step, best of
     step_count: int = 1000                 # steps per round
     camera_window: float = 2.0             # wall s of streaming camera measured
+    scan_repeats: int = 300                # scans per timing of the laser rows
+    camera_frames: int = 20                # frames per timing of the robot camera row
     log_path: str = os.path.join(tempfile.gettempdir(), 'world_benchmark-nodes.log')
 
 
@@ -97,7 +101,8 @@ QUICK = Config(calls=5, growth_counts=(1, 2), growth_calls=3, robot_counts=(1,),
                speed_window=0.3, speed_rounds=1, speed_settle=0.1, real_time_window=0.3,
                warm_up=0.2, startup_runs=1,
                durations=(1,), velocities=(0.5,), turning_rtf=4.0, turning_check_rtfs=(),
-               core_spawns=3, step_rounds=2, step_count=200, camera_window=0.3)
+               core_spawns=3, step_rounds=2, step_count=200, camera_window=0.3,
+               scan_repeats=20, camera_frames=2)
 
 
 @dataclass
@@ -212,6 +217,8 @@ def fleet_parameters(count, real_time_factor):
         # The robots drive for the whole measurement on one command; a sim-time timeout
         # would stop them between two commands sent at wall-clock pace.
         'cmd_vel_timeout': 0.0,
+        # The fleet's grid reaches beyond the yard's walls; the raw fleet has no scenery.
+        'scenery': '',
     }
 
 
@@ -661,13 +668,13 @@ class FleetWorld:
     them; every robot's odometry is integrated and would be published to any subscriber.
     """
 
-    def __init__(self, observer, count, real_time_factor):
+    def __init__(self, observer, count, real_time_factor, **parameters):
         from nav_msgs.msg import Odometry
         from rosgraph_msgs.msg import Clock
         self._observer = observer
         self.names = fleet_names(count)
-        self.process = NodeProcess('mujoco_world', node_name='mujoco',
-                                   parameters=fleet_parameters(count, real_time_factor))
+        self.process = NodeProcess('mujoco_world', node_name='mujoco', parameters={
+            **fleet_parameters(count, real_time_factor), **parameters})
         self.fleet = None
         self._subscriptions = []
         try:
@@ -1020,6 +1027,130 @@ def camera_table(observer, config):
     return table
 
 
+# ------------------------------------------------------------------------ sensors
+
+
+def cpu_time_per_call(function, repeats):
+    """Return the CPU time of this thread one call of function took, in s."""
+    start = time.thread_time()
+    for _ in range(repeats):
+        function()
+    return (time.thread_time() - start) / repeats
+
+
+def sensor_world(samples=360):
+    """Return a World in the yard holding tinybot, its laser given samples beams."""
+    from service_tutorial.sim.world import World
+    world = World(scenery=model_path('yard'))
+    urdf = read_model('tinybot').replace('<samples>360</samples>', f'<samples>{samples}</samples>')
+    world.spawn_urdf('tinybot', urdf, base_dir=os.path.dirname(model_path('tinybot')))
+    world.step(250)
+    return world
+
+
+def scan_row(samples, config):
+    """Time one scan of tinybot's laser, and one bare mj_multiRay of the same rays."""
+    from service_tutorial.sim.plugins.ray_sensor import RAY_GEOM_GROUPS, RaySensor
+    world = sensor_world(samples)
+    laser = world.models['tinybot'].plugin(RaySensor)
+    laser.set_active(True)
+    world.step(1)
+    model, data, site = world.model, world.data, laser.site_id
+    origin = data.site_xpos[site].copy()
+    directions = (laser.config.directions() @ data.site_xmat[site].reshape(3, 3).T).ravel()
+    geom_ids, distances = np.zeros(samples, dtype=np.int32), np.zeros(samples)
+
+    def bare():
+        mujoco.mj_multiRay(model, data, origin, directions, RAY_GEOM_GROUPS, 1, -1, geom_ids,
+                           distances, None, samples, laser.config.range_max)
+    scans, rays = [], []
+    for _ in range(3):  # alternating, so both see the same load; the best of each
+        scans.append(cpu_time_per_call(laser.read, config.scan_repeats))
+        rays.append(cpu_time_per_call(bare, config.scan_repeats))
+    scan, ray = min(scans) * 1e6, min(rays) * 1e6
+    return [f'{samples}-beam scan, tinybot in the yard (us)', scan, ray, scan / ray, 1.5,
+            scan / ray <= 1.5]
+
+
+def camera_frame_row(config):
+    """Time one frame of tinybot's camera (320x240), and one of a bare mujoco.Renderer."""
+    from service_tutorial.sim.plugins.camera_sensor import CameraSensor
+    from service_tutorial.sim.rendering import prefer_headless_gl
+    world = sensor_world()
+    camera = world.models['tinybot'].plugin(CameraSensor)
+    camera.set_active(True)
+    world.step(1)  # the first frame makes the renderer and its GL context
+    config_camera = camera.config
+    prefer_headless_gl()
+    renderer = mujoco.Renderer(world.model, config_camera.height, config_camera.width)
+    name = world.models['tinybot'].scoped(config_camera.site_name(CameraSensor.kind))
+
+    def bare():
+        renderer.update_scene(world.data, camera=name)
+        renderer.render()
+    frames, bare_frames = [], []
+    try:
+        bare()
+        for _ in range(config.camera_frames):
+            start = time.perf_counter()
+            camera.read()
+            frames.append(time.perf_counter() - start)
+            start = time.perf_counter()
+            bare()
+            bare_frames.append(time.perf_counter() - start)
+    finally:
+        renderer.close()
+        camera.close()
+    frame, bare_frame = median_ms(frames), median_ms(bare_frames)
+    return [f'{config_camera.width}x{config_camera.height} robot camera frame (ms)', frame,
+            bare_frame, frame / bare_frame, 1.5, frame / bare_frame <= 1.5]
+
+
+def laser_speed_rows(observer, config):
+    """Free-running speed of tinybot with its 5 Hz laser listened to, and without."""
+    from sensor_msgs.msg import LaserScan
+    rounds = []
+    with FleetWorld(observer, 1, 0.0, scenery='yard.urdf') as world:
+        world.fleet.drive_for(config.warm_up)
+        for _ in range(config.speed_rounds):
+            quiet, quiet_per_cpu = world.window(config.speed_window)[:2]
+            scans, subscription = observer.counter(LaserScan, f'/{world.names[0]}/scan')
+            try:
+                wait_for_count(scans, world.process, 'scan')
+                listened, listened_per_cpu = world.window(config.speed_window)[:2]
+            finally:
+                observer.node.destroy_subscription(subscription)
+            rounds.append((listened, quiet, listened_per_cpu, quiet_per_cpu))
+    listened, quiet, listened_per_cpu, quiet_per_cpu = (
+        statistics.median(column) for column in zip(*rounds))
+    return [['free-running speed, 360-beam laser at 5 Hz listened to / not (sim s per wall '
+             's)', listened, quiet, listened / quiet, 0.8, listened / quiet >= 0.8],
+            ['the same per CPU second of the world process (sim s per CPU s)',
+             listened_per_cpu, quiet_per_cpu, listened_per_cpu / quiet_per_cpu, 0.8,
+             listened_per_cpu / quiet_per_cpu >= 0.8]]
+
+
+def sensor_table(observer, config):
+    """Measure the sensors' cost against bare MuJoCo calls, and against not listening."""
+    table = Table('sensors', "Sensors: tinybot's laser and camera against bare MuJoCo", [
+        ('figure', ''), ('sensor', '.3f'), ('bare', '.3f'), ('ratio', '.3f'),
+        ('limit', '.2f'), ('within', '')])
+    table.rows = [scan_row(360, config), scan_row(720, config), camera_frame_row(config),
+                  *laser_speed_rows(observer, config)]
+    table.note = ('scans: CPU time of RaySensor.read() (cast, own geoms hidden, REP 117 '
+                  'ranges, noise) against mj_multiRay of the same rays on the same model, best '
+                  f'of 3 x {config.scan_repeats}; ratio at most the limit. Camera: median wall '
+                  f'time of {config.camera_frames} frames of CameraSensor.read() against '
+                  'update_scene() and render() of a bare mujoco.Renderer at the same camera; '
+                  'ratio at most the limit. Speed: mujoco_world driving tinybot (bot0) in the '
+                  'yard, free-running, with a subscriber to bot0/scan here against none, '
+                  f'medians of {config.speed_rounds} alternating rounds of '
+                  f'{config.speed_window} s; ratio at least the limit. Free-running, a '
+                  'listened sensor is held to its rate in wall time too, like every stream; '
+                  'per CPU second is the steadier figure on a shared machine.')
+    return table
+
+
 def answers_table(observer, config):
     """Time how soon a missing service is reported and a turn without turning answered."""
     from rclpy.executors import SingleThreadedExecutor
@@ -1102,7 +1233,7 @@ def targets(tables):
 
 
 SECTIONS = ('round_trips', 'spawn_growth', 'speed', 'startup', 'turning', 'core', 'camera',
-            'answers')
+            'sensors', 'answers')
 
 
 def run(config, *, sections=SECTIONS, report=print):
@@ -1129,6 +1260,8 @@ def run(config, *, sections=SECTIONS, report=print):
             add(core_table(config))
         if 'camera' in sections:
             add(camera_table(observer, config))
+        if 'sensors' in sections:
+            add(sensor_table(observer, config))
         if 'answers' in sections:
             add(answers_table(observer, config))
     finally:

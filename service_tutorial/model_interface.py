@@ -3,11 +3,11 @@ The ROS face of one model in the world: the turtle of turtlesim.
 
 The world node makes a ModelInterface when it spawns a model and destroys it along with the
 model. The interface keeps the model's ROS namespace and gives each plugin of the model its
-topics, where ros_names.plugin_topic() says gazebo_ros would put them; today that is every
-drive (cmd_vel in, odom and joint_states out, like gazebo_ros_diff_drive and
-gazebo_ros_skid_steer_drive). A sensor is one more small class in PLUGIN_INTERFACES: a class
-method applies_to(plugin), a constructor (node, world, model, plugin, namespace),
-publish(stream, now) for the node's publication streams, and destroy().
+topics, where ros_names.plugin_topic() says gazebo_ros would put them: every drive (cmd_vel in,
+odom and joint_states out, like gazebo_ros_diff_drive and gazebo_ros_skid_steer_drive), its
+odometry on /tf (tf_interface.py) and the sensors (sensor_interfaces.py). Each face is a class
+in PLUGIN_INTERFACES: a class method applies_to(plugin), a constructor (node, world, model,
+plugin, namespace), publish(stream, now) for the node's publication streams, and destroy().
 """
 
 from geometry_msgs.msg import Twist
@@ -16,6 +16,7 @@ from sensor_msgs.msg import JointState
 from service_tutorial.conversions import fill_pose_msg, fill_time_msg, fill_twist_msg
 from service_tutorial.pacing import JOINT_STATES_STREAM, ODOMETRY_STREAM
 from service_tutorial.ros_names import plugin_topic
+from service_tutorial.sensor_interfaces import SENSOR_INTERFACES
 from service_tutorial.sim.plugins.diff_drive import DiffDrive, MAX_WHEEL_RIM_SPEED
 from service_tutorial.sim.plugins.drive_config import is_ros1_block
 from service_tutorial.sim.validation import finite_number
@@ -132,7 +133,7 @@ class DriveInterface:
 
 
 # Every kind of plugin that has a ROS face, in the order their topics are made.
-PLUGIN_INTERFACES = (DriveInterface, OdomTfInterface)
+PLUGIN_INTERFACES = (DriveInterface, OdomTfInterface) + SENSOR_INTERFACES
 
 
 class ModelInterface:

@@ -48,7 +48,7 @@ RATE_PARAMETERS = {CLOCK_STREAM: 'clock_publish_rate', ODOMETRY_STREAM: 'odom_pu
 
 
 def resolve_model_path(model):
-    """Find a model file (URDF or xacro): an absolute path, or one in the package's models/."""
+    """Find a model (URDF or xacro) or scenery file: an absolute path, or one in models/."""
     if os.path.isabs(model):
         return model
     return os.path.join(get_package_share_directory(PACKAGE), 'models', model)
@@ -102,9 +102,11 @@ class MujocoWorld(Node):
         # Imported here, after the parameters passed their checks: a bad one ends the program
         # before the simulation's imports (yourdfpy and trimesh take over a second).
         from service_tutorial.sim.world import World
+        scenery = parameters['scenery']
         self.world = World(timestep=parameters['timestep'],
                            cmd_vel_timeout=parameters['cmd_vel_timeout'],
-                           package_resolver=get_package_share_directory)
+                           package_resolver=get_package_share_directory,
+                           scenery=resolve_model_path(scenery) if scenery else None)
         self.pacer = Pacer(timestep=self.world.timestep,
                            real_time_factor=parameters['real_time_factor'],
                            periods={stream: 1.0 / parameters[name]

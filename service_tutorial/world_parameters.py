@@ -211,6 +211,10 @@ WORLD_PARAMETERS = (
         'models: all at the origin)',
         multiple_of=4, read_only=True),
     ParameterSpec(
+        'scenery', 'yard.urdf',
+        "Static obstacles loaded at start-up: a URDF fixed to 'world' or an MJCF file, in the "
+        "package's models/ folder or an absolute path ('': the bare plane)", read_only=True),
+    ParameterSpec(
         'gui', False, "MuJoCo's interactive viewer (needs a display)", read_only=True),
     ParameterSpec(
         'camera_enabled', False,

@@ -27,6 +27,7 @@ EXPECTED_ROWS = {
     'targets': 1 + 2 * len(QUICK.robot_counts) + 1 + 1,
     'core': 2,
     'camera': 1,
+    'sensors': 5,
     'answers': 3,
 }
 

@@ -60,7 +60,7 @@ def test_models_mapping_is_read_only_and_holds_the_plugins():
     assert list(world.models) == ['tinybot', 'r2d2']
     with pytest.raises(TypeError):
         world.models['c3po'] = world.models['r2d2']
-    (drive,) = world.models['tinybot'].plugins
+    drive = world.models['tinybot'].plugins[0]  # then its laser, camera and IMU
     assert isinstance(drive, DiffDrive)
     assert drive.config == world.diff_drive('tinybot')
     assert drive.block.filename == 'libgazebo_ros_diff_drive.so'

@@ -78,7 +78,7 @@ def tick_kind(monkeypatch):
 
 def test_registry_maps_gazebo_filenames_to_plugin_classes():
     assert plugins.kind_of('libgazebo_ros_diff_drive.so') == 'gazebo_ros_diff_drive'
-    assert plugins.kind_of('libgazebo_ros_camera.so') is None
+    assert plugins.kind_of('libgazebo_ros_p3d.so') is None
     assert plugins.kind_of('') is None
     assert plugins.plugin_class('gazebo_ros_diff_drive') is DiffDrive
 

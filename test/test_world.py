@@ -120,7 +120,7 @@ def test_model_listing_and_delete(world):
     assert world.model_names() == ['tinybot']
     with pytest.raises(WorldError, match="no model named 'r2d2'"):
         world.delete_model('r2d2')
-    assert world.model.nbody == 1 + 5
+    assert world.model.nbody == 1 + 7  # the world body and tinybot's seven links
 
 
 def test_reference_frames(world):

@@ -155,7 +155,7 @@ def test_a_drive_whose_block_says_no_sends_no_tf(ros):
                                           '<publish_odom_tf>false</publish_odom_tf>')
     spawn(ros, 'quiet', quiet, namespace='quiet', x=2.0)
     assert [type(plugin).__name__ for plugin in world.models['quiet'].plugins] == [
-        'DriveInterface']
+        'DriveInterface', 'LaserScanInterface', 'CameraInterface', 'ImuInterface']
     assert 'OdomTfInterface' in [type(p).__name__ for p in world.models['tinybot'].plugins]
 
 

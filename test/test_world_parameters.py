@@ -35,6 +35,7 @@ INTENDED = {
     'model_names': (T.PARAMETER_STRING_ARRAY, None, True),
     'model_namespaces': (T.PARAMETER_STRING_ARRAY, None, True),
     'model_poses': (T.PARAMETER_DOUBLE_ARRAY, None, True),
+    'scenery': (T.PARAMETER_STRING, None, True),
     'gui': (T.PARAMETER_BOOL, None, True),
     'camera_enabled': (T.PARAMETER_BOOL, None, False),
     'camera_rate': (T.PARAMETER_DOUBLE, (0.0, INF), False),
@@ -55,7 +56,7 @@ WRONG_TYPE = {
     'model_poses': '[a, b, c, d]', 'gui': 'maybe', 'camera_enabled': '0.5',
     'camera_rate': '[10]', 'camera_width': '480.0', 'camera_height': 'tall',
     'camera_position': '1.0', 'camera_look_at': '[a, b, c]', 'camera_fovy': 'wide',
-    'snapshot_directory': '42',
+    'snapshot_directory': '42', 'scenery': '[yard.urdf]',
 }
 
 # A value out of range, and how the message writes it back; booleans and the directory have none.

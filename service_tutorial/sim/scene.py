@@ -1,11 +1,11 @@
-"""The empty world every model is spawned into: physics options, ground, sky and sun."""
+"""The world every model is spawned into: physics options, ground, sky, sun and scenery."""
 
 import mujoco
 from service_tutorial.sim.urdf.builder import CONTACT_TIME_CONSTANT
 
 
-def make_scene(timestep, gravity):
-    """Return the spec of an empty world: physics options, ground, sky and sun."""
+def make_scene(timestep, gravity, scenery=None):
+    """Return the spec of a world without models: physics options, ground, sky, sun, scenery."""
     spec = mujoco.MjSpec()
     spec.modelname = 'service_tutorial'
     spec.compiler.degree = False
@@ -41,4 +41,6 @@ def make_scene(timestep, gravity):
         name='sun', type=mujoco.mjtLightType.mjLIGHT_DIRECTIONAL, pos=[0.0, 0.0, 10.0],
         dir=[0.3, 0.2, -1.0], diffuse=[0.7, 0.7, 0.7], specular=[0.2, 0.2, 0.2],
         castshadow=False)
+    if scenery is not None:
+        scenery.attach(spec)
     return spec

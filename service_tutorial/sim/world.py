@@ -21,6 +21,7 @@ from service_tutorial.sim.frames import ModelState
 from service_tutorial.sim.model import Model
 from service_tutorial.sim.recovery import Recovery
 from service_tutorial.sim.recovery import take_steps
+from service_tutorial.sim.scenery import Scenery
 from service_tutorial.sim.urdf.builder import load_urdf
 from service_tutorial.sim.urdf.hardened_xml import MAX_MODEL_XML_BYTES
 from service_tutorial.sim.urdf.hardened_xml import UrdfError
@@ -69,9 +70,9 @@ class World:
     """
 
     def __init__(self, *, timestep=0.002, gravity=(0.0, 0.0, -9.81), cmd_vel_timeout=0.5,
-                 package_resolver=None):
+                 package_resolver=None, scenery=None):
         """
-        Create an empty world.
+        Create a world without models, with the static obstacles of a scenery file if given.
 
         package_resolver maps a package name to its share folder, for package:// meshes;
         without one, such meshes are refused.
@@ -83,14 +84,16 @@ class World:
         cmd_vel_timeout = validation.non_negative_number(cmd_vel_timeout, 'cmd_vel_timeout')
         _route_mujoco_messages()
         self._timestep = timestep
-        self._gravity = gravity
         self._cmd_vel_timeout = cmd_vel_timeout
         self._package_resolver = package_resolver
         self._paused = False
         self._models = {}
         self._next_event = math.inf
         self._kinematics_fresh = False
-        self._spec = scene.make_scene(timestep, gravity)
+        # What every spec the world builds starts from: physics options, ground, scenery.
+        self._scene = (timestep, gravity,
+                       Scenery(scenery, package_resolver=package_resolver) if scenery else None)
+        self._spec = scene.make_scene(*self._scene)
         self._model = self._spec.compile()
         self._data = mujoco.MjData(self._model)
         self._recovery = Recovery(self)
@@ -239,7 +242,7 @@ class World:
         holds only the live robots; their integration state is carried over, so the
         simulation goes on exactly as if the spec had been edited in place.
         """
-        spec = scene.make_scene(self._timestep, self._gravity)
+        spec = scene.make_scene(*self._scene)
         for model in models.values():
             model.attach(spec)
         mj_model = spec.compile()

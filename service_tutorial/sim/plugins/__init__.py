@@ -14,9 +14,15 @@ import importlib
 import math
 
 # Gazebo plugin name (as it appears in the <plugin filename>) -> module that stands in for it.
+# A name that is part of another (gazebo_ros_imu) comes after it: kind_of() takes the first match.
 KINDS = {
     'gazebo_ros_diff_drive': 'service_tutorial.sim.plugins.diff_drive',
     'gazebo_ros_skid_steer_drive': 'service_tutorial.sim.plugins.skid_steer',
+    'gazebo_ros_laser': 'service_tutorial.sim.plugins.ray_sensor',
+    'gazebo_ros_ray_sensor': 'service_tutorial.sim.plugins.ray_sensor',
+    'gazebo_ros_camera': 'service_tutorial.sim.plugins.camera_sensor',
+    'gazebo_ros_imu_sensor': 'service_tutorial.sim.plugins.imu_sensor',
+    'gazebo_ros_imu': 'service_tutorial.sim.plugins.imu_sensor',
 }
 
 

@@ -20,6 +20,7 @@ from service_tutorial.sim.urdf.gazebo import LinkSettings
 from service_tutorial.sim.urdf.gazebo import plugin_filenames
 from service_tutorial.sim.urdf.gazebo import read_link_settings
 from service_tutorial.sim.urdf.gazebo import read_plugin_blocks
+from service_tutorial.sim.urdf.gazebo import read_sensor_plugin_blocks
 from service_tutorial.sim.urdf.hardened_xml import check_structure
 from service_tutorial.sim.urdf.hardened_xml import parse_model_xml
 from service_tutorial.sim.urdf.hardened_xml import parse_numbers
@@ -99,7 +100,8 @@ def load_urdf(model_xml, *, base_dir=None, package_resolver=None, timestep=0.002
     builder = _SpecBuilder(urdf.robot, base_dir, package_resolver, read_link_settings(root),
                            timestep)
     description = builder.build()
-    setups, plugin_notes = _plugin_setups(read_plugin_blocks(root), urdf.robot)
+    setups, plugin_notes = _plugin_setups(
+        read_plugin_blocks(root) + read_sensor_plugin_blocks(root), urdf.robot)
     for setup in setups:
         plugins.plugin_class(setup.kind).build(description.spec, setup.config, timestep)
     missing = _missing_meshes(root, builder.meshes.missing)

@@ -1,0 +1,133 @@
+"""
+The Gazebo camera plugin (gazebo_ros_camera, ROS 1 and ROS 2), simulation side.
+
+A <sensor type="camera"> becomes a MuJoCo camera on the link, rendered offscreen by the same
+renderer as the world's scene camera (rendering.py), with the block's image size, horizontal
+field of view and clipping distances. Gazebo's camera looks along the x axis of its link with
+z up; MuJoCo's looks along -z with y up, hence the fixed turn OPTICAL_TURN between the two.
+"""
+
+from dataclasses import dataclass
+import math
+
+import mujoco
+import numpy as np
+from service_tutorial.sim.plugins.sensor import Sensor
+from service_tutorial.sim.plugins.sensor import sensor_of
+from service_tutorial.sim.plugins.sensor import SENSOR_SITE_GROUP
+from service_tutorial.sim.plugins.sensor import SensorConfig
+from service_tutorial.sim.rendering import OffscreenCamera
+from service_tutorial.sim.rendering import pinhole_matrix
+from service_tutorial.sim.urdf.hardened_xml import UrdfError
+from service_tutorial.sim.validation import quoted
+
+# From a Gazebo camera's frame (x forward, z up) to MuJoCo's (-z forward, y up), (w, x, y, z).
+OPTICAL_TURN = (0.5, 0.5, -0.5, -0.5)
+# The largest image a camera may ask for, in pixels along either side.
+MAX_IMAGE_SIDE = 4096
+# SDF image formats -> sensor_msgs/Image encodings.
+ENCODINGS = {'R8G8B8': 'rgb8', 'RGB_INT8': 'rgb8', 'B8G8R8': 'bgr8', 'BGR_INT8': 'bgr8',
+             'L8': 'mono8', 'L_INT8': 'mono8'}
+# ITU-R BT.601 luma, for mono8 images.
+_LUMA = np.array([0.299, 0.587, 0.114])
+
+
+@dataclass(frozen=True)
+class CameraConfig(SensorConfig):
+    """A camera's image: its size, horizontal field of view, clipping and encoding."""
+
+    width: int  # pixels
+    height: int  # pixels
+    horizontal_fov: float  # rad
+    near: float  # m, nearest distance drawn
+    far: float  # m, farthest distance drawn
+    encoding: str  # sensor_msgs/Image encoding: rgb8, bgr8 or mono8
+
+    @property
+    def fovy(self):
+        """Return the vertical field of view in degrees, for square pixels."""
+        return math.degrees(
+            2.0 * math.atan(math.tan(self.horizontal_fov / 2.0) * self.height / self.width))
+
+    def intrinsic_matrix(self):
+        """Return the 3x3 pinhole matrix K; its fx follows from the horizontal field of view."""
+        return pinhole_matrix(self.width, self.height, self.fovy)
+
+
+def read_config(block):
+    """Return the CameraConfig of a camera plugin from the <sensor> it sits in."""
+    sensor = sensor_of(block, ('camera',), 'camera')
+    size = {}
+    for side, default in (('width', 320), ('height', 240)):
+        size[side] = sensor.number(f'camera/image/{side}', default, above=0, whole=True)
+        if size[side] > MAX_IMAGE_SIDE:
+            raise UrdfError(f'sensor {quoted(sensor.name)} <camera/image/{side}> must be at '
+                            f'most {MAX_IMAGE_SIDE}: {size[side]}')
+    horizontal_fov = sensor.number('camera/horizontal_fov', 1.047, above=0.0)
+    if horizontal_fov >= math.pi:
+        raise UrdfError(f'sensor {quoted(sensor.name)} <camera/horizontal_fov> must be below '
+                        f'pi for a pinhole camera: {horizontal_fov:g}')
+    near = sensor.number('camera/clip/near', 0.1, above=0.0)
+    far = sensor.number('camera/clip/far', 100.0, above=near)
+    image_format = sensor.text('camera/image/format', 'R8G8B8')
+    if image_format not in ENCODINGS:
+        raise UrdfError(f'sensor {quoted(sensor.name)} <camera/image/format> must be one of '
+                        f'{", ".join(ENCODINGS)}: {quoted(image_format)}')
+    return CameraConfig(
+        name=sensor.name, link=sensor.link, position=sensor.position,
+        orientation=sensor.orientation, update_rate=sensor.update_rate, width=size['width'],
+        height=size['height'], horizontal_fov=horizontal_fov, near=near, far=far,
+        encoding=ENCODINGS[image_format])
+
+
+class CameraSensor(Sensor):
+    """A camera on a robot's link: each reading is an image, (height, width, 3) or mono."""
+
+    title = 'camera'
+    kind = 'camera'
+
+    def __init__(self, config, block):
+        """Start with no image; the renderer is made on the first reading."""
+        super().__init__(config, block)
+        self.image = None
+        self._view = OffscreenCamera(config.width, config.height)
+        self._camera_id = -1
+
+    @classmethod
+    def configure(cls, block, robot):
+        """Return the CameraConfig of the block's <sensor> (see read_config)."""
+        return read_config(block)
+
+    @classmethod
+    def build(cls, spec, config, timestep):
+        """Put a MuJoCo camera, and a site, at the sensor's pose on its link."""
+        body = spec.body(config.link)
+        name = config.site_name(cls.kind)
+        body.add_site(name=name, pos=config.position, quat=config.orientation,
+                      group=SENSOR_SITE_GROUP)
+        quaternion = np.zeros(4)
+        mujoco.mju_mulQuat(quaternion, np.array(config.orientation), np.array(OPTICAL_TURN))
+        body.add_camera(name=name, pos=config.position, quat=quaternion, fovy=config.fovy)
+
+    def bind(self, world, model):
+        """Find the camera in the compiled model."""
+        super().bind(world, model)
+        self._camera_id = world.model.camera(model.scoped(self.config.site_name(self.kind))).id
+
+    def read(self):
+        """Render the world from the camera, in the block's encoding."""
+        config = self.config
+        pixels = self._view.render_view(self.world.model, self.world.data, self._camera_id,
+                                        config.fovy, config.near, config.far)
+        if config.encoding == 'bgr8':
+            pixels = np.ascontiguousarray(pixels[:, :, ::-1])
+        elif config.encoding == 'mono8':
+            pixels = np.round(pixels @ _LUMA).astype(np.uint8)
+        self.image = pixels
+
+    def close(self):
+        """Release the renderer and its GL context."""
+        self._view.close()
+
+
+PLUGIN = CameraSensor
