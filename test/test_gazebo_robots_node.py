@@ -182,21 +182,25 @@ def turn_for(world, ros, name, topic, angular_z, duration):
     assert drive.commanded_at is None, 'a command was still in force'
     publisher.publish(twist(angular_z=angular_z))
     assert ros.wait_for(lambda: drive.commanded_at is not None)
-    end = drive.commanded_at + duration
-    samples = []  # (simulation time, unwrapped yaw change)
-    while not samples or samples[-1][0] < end:
+    # At rest until the first command came: no turn at that time.
+    samples = [(drive.commanded_at, 0.0)]  # (simulation time, unwrapped yaw change)
+    end = samples[0][0] + duration
+    while samples[-1][0] < end:
         world.wait_sim(0.01)
         publisher.publish(twist(angular_z=angular_z))
         state = world.state(name)
-        turned = samples[-1][1] if samples else 0.0
-        turned += math.remainder(yaw_of(state.pose.orientation) - start_yaw - turned,
-                                 2.0 * math.pi)
+        assert drive.commanded_at is not None, \
+            f'the command lapsed before {seconds(state.header.stamp):.3f} s: cmd_vel came late'
+        turned = samples[-1][1] + math.remainder(
+            yaw_of(state.pose.orientation) - start_yaw - samples[-1][1], 2.0 * math.pi)
         samples.append((seconds(state.header.stamp), turned))
     publisher.publish(Twist())
-    (before, turned_before), (after, turned_after) = (
-        ([(0.0, 0.0)] + samples)[-2], samples[-1])
+    (before, turned_before), (after, turned_after) = samples[-2:]
     settle(world, name)
     ros.client_node.destroy_publisher(publisher)
+    start = samples[0][0]
+    print(f'\n{len(samples) - 1} states over the turn, the last two at {before - start:.3f} and '
+          f'{after - start:.3f} s: {turned_before:.4f} and {turned_after:.4f} rad')
     return turned_before + (turned_after - turned_before) * (end - before) / (after - before)
 
 
@@ -297,8 +301,8 @@ def test_xacro_with_find_and_arguments_through_the_client(real_time_world, ros):
     assert after.x - before.x == pytest.approx(0.2, rel=0.1)
 
 
-def test_a_xacro_file_named_urdf_spawns_with_what_was_left_out_named(fast_world):
-    spawned = spawn_client('--file', os.path.join(TEST_MODELS, 'ros_gripper_parts.urdf'),
+def test_a_xacro_file_not_named_xacro_spawns_with_what_was_left_out_named(fast_world):
+    spawned = spawn_client('--file', os.path.join(TEST_MODELS, 'ros_gripper_parts.xml'),
                            '--name', 'gripper', '-z', '0.5')
 
     assert spawned.returncode == 0, spawned.stdout + spawned.stderr
@@ -313,7 +317,7 @@ def test_start_up_models_may_be_xacro_and_the_log_names_what_was_left_out(ros):
     log = ros.subscribe(Log, '/rosout', depth=1000)
     world = WorldClient(ros, real_time_factor=0.0, parameters=[
         Parameter('models', value=['tinybot.urdf',
-                                   os.path.join(TEST_MODELS, 'ros_gripper_parts.urdf'),
+                                   os.path.join(TEST_MODELS, 'ros_gripper_parts.xml'),
                                    os.path.join(TEST_MODELS, 'ros_mast_tinybot.urdf.xacro')]),
         Parameter('model_names', value=['tinybot', 'gripper', 'masted']),
         Parameter('model_namespaces', value=['', '', 'masted']),

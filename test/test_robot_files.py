@@ -46,7 +46,7 @@ def test_xacro_finds_the_package_through_the_ament_index_and_takes_arguments():
 
 
 def test_xacro_is_recognised_by_its_namespace_whatever_the_file_is_called():
-    robot_file = read_robot_file(os.path.join(TEST_MODELS, 'ros_gripper_parts.urdf'))
+    robot_file = read_robot_file(os.path.join(TEST_MODELS, 'ros_gripper_parts.xml'))
     fingers = parsed(robot_file).findall('link')
     assert [link.get('name') for link in fingers] == ['palm', 'left_finger', 'right_finger']
 
