@@ -24,8 +24,9 @@ from service_tutorial.client_main import program_arguments
 from service_tutorial.model_services import response_text
 from service_tutorial.robot_turning_action_server import MAX_ANGLE
 from service_tutorial.robot_turning_client import ask_turning_request, MAX_ANGULAR_VEL
-from service_tutorial.robot_turning_client import NOT_A_NUMBER, TurningInputError
-from service_tutorial.robot_turning_client import VELOCITY_PROMPT, VELOCITY_TOO_HIGH
+from service_tutorial.robot_turning_client import NOT_A_NUMBER, parse_pair_or_nothing
+from service_tutorial.robot_turning_client import TurningInputError, VELOCITY_PROMPT
+from service_tutorial.robot_turning_client import VELOCITY_TOO_HIGH
 from srv_interfaces.action import TurnRobot
 
 ANGLE_PROMPT = '> Type turning angle: '
@@ -177,17 +178,8 @@ def parse_arguments(argv):
                         help='how far to turn, in rad (positive turns left)')
     parser.add_argument('angular_vel', nargs='?',
                         help=f'top turning speed in rad/s, above 0 and at most {MAX_ANGULAR_VEL}')
-    options = parser.parse_args(argv)
-    if (options.angle is None) != (options.angular_vel is None):
-        parser.error('give both angle and angular_vel, or neither to be prompted')
-    if options.angle is not None:
-        try:
-            options.goal = parse_turning_goal(options.angle, options.angular_vel)
-        except TurningInputError as error:
-            parser.error(str(error))
-    else:
-        options.goal = None
-    return options
+    return parse_pair_or_nothing(argv, parser, ('angle', 'angular_vel'), parse_turning_goal,
+                                 'goal')
 
 
 def main(args=None):

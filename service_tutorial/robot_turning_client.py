@@ -78,6 +78,27 @@ class RobotTurningClient(Node):
         return self.turning_cli.call_async(request)
 
 
+def parse_pair_or_nothing(argv, parser, names, parse, result):
+    """
+    Read the two positionals names through parse() into options.<result>, None if not given.
+
+    The lesson's clients take both numbers on the command line or prompt for them; a bad
+    pair ends the program with argparse's usage line and the reason.
+    """
+    first, second = names
+    options = parser.parse_args(argv)
+    values = (getattr(options, first), getattr(options, second))
+    if (values[0] is None) != (values[1] is None):
+        parser.error(f'give both {first} and {second}, or neither to be prompted')
+    setattr(options, result, None)
+    if values[0] is not None:
+        try:
+            setattr(options, result, parse(*values))
+        except TurningInputError as error:
+            parser.error(str(error))
+    return options
+
+
 def parse_arguments(argv):
     """Read the command line (ROS arguments already removed)."""
     parser = argparse.ArgumentParser(
@@ -87,17 +108,8 @@ def parse_arguments(argv):
                         help='how long to turn, in whole seconds')
     parser.add_argument('angular_vel', nargs='?',
                         help=f'turning rate in rad/s, at most {MAX_ANGULAR_VEL} either way')
-    options = parser.parse_args(argv)
-    if (options.time_duration is None) != (options.angular_vel is None):
-        parser.error('give both time_duration and angular_vel, or neither to be prompted')
-    if options.time_duration is not None:
-        try:
-            options.request = parse_turning_request(options.time_duration, options.angular_vel)
-        except TurningInputError as error:
-            parser.error(str(error))
-    else:
-        options.request = None
-    return options
+    return parse_pair_or_nothing(argv, parser, ('time_duration', 'angular_vel'),
+                                 parse_turning_request, 'request')
 
 
 def main(args=None):
