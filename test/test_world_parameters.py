@@ -255,6 +255,37 @@ def test_a_bad_run_time_value_is_refused_with_a_reason_and_the_node_goes_on(
     assert result.successful and changes == [{'paused': True}]
 
 
+RUN_TIME = sorted(name for name, (_, _, read_only) in INTENDED.items() if not read_only)
+
+
+def wrong_type_value(name):
+    """Return a ParameterValue of a type the parameter never takes."""
+    if INTENDED[name][0] == T.PARAMETER_STRING:
+        return ParameterValue(type=T.PARAMETER_INTEGER, integer_value=42)
+    return ParameterValue(type=T.PARAMETER_STRING, string_value='fast')
+
+
+@pytest.mark.parametrize('name', RUN_TIME)
+def test_every_run_time_parameter_refuses_a_wrong_type_and_a_value_out_of_range(ros, name):
+    node = ros.add_node(node_with())
+    values = declare_world_parameters(node)
+    changes = []
+    values.on_change(changes.append)
+    before = values[name]
+    # rclpy's own type check answers a wrong type; the world's checks name the parameter.
+    refusals = [(wrong_type_value(name), 'Wrong parameter type')]
+    if name in OUT_OF_RANGE:
+        text, _ = OUT_OF_RANGE[name]
+        refusals.append((Parameter(name, value=yaml.safe_load(text)).get_parameter_value(),
+                         name))
+    for value, words in refusals:
+        result = set_parameter(ros, node, name, value)
+        assert not result.successful, f'{name} took {value}'
+        assert words in result.reason, result.reason
+    assert values[name] == before and not changes
+    assert get_parameter(ros, node, 'paused').type == T.PARAMETER_BOOL
+
+
 def test_on_change_follows_the_names_it_was_given(rclpy_session):
     node = node_with()
     try:
