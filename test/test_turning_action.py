@@ -112,9 +112,11 @@ class ActionWorld:
         truth = GroundTruth(self)
         truth.wait_at_rest()
         truth.turned = 0.0
+        start = truth.time
         goal = Goal(self, angle, angular_vel)
         assert goal.handle.accepted
         assert truth.follow_until(goal.done)
+        self.turn_duration = truth.time - start  # simulation time from goal to result
         truth.wait_at_rest()
         status, result = goal.result()
         return status, result, goal.feedback, truth.turned
@@ -140,8 +142,10 @@ def test_a_quarter_turn_left_ends_on_target_with_rising_feedback(action_world):
     assert result.angle_turned == pytest.approx(math.pi / 2, abs=0.01)
     assert result.angle_turned == pytest.approx(turned, abs=0.02)
     assert result.message.startswith('reached the goal')
-    # About 3.5 s of simulation time at 10 Hz; each report adds up, and the angle only grows.
-    assert 5 <= len(feedback) <= 60
+    # Feedback at 10 Hz of simulation time for as long as the turn took; the angle only grows.
+    print(f'\n{len(feedback)} feedback messages over {action_world.turn_duration:.2f} s')
+    assert len(feedback) >= 5
+    assert len(feedback) == pytest.approx(10.0 * action_world.turn_duration, abs=2.0)
     progress = [report.angle_turned for report in feedback]
     assert all(later >= earlier - 1e-3 for earlier, later in zip(progress, progress[1:]))
     assert progress[-1] > progress[0] + 1.0
