@@ -12,6 +12,7 @@ from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import CameraInfo, Image, Imu, LaserScan
 from service_tutorial.conversions import seconds_of as seconds
 from service_tutorial.mujoco_world import MujocoWorld
+from service_tutorial.sim.plugins.camera_sensor import CameraSensor
 from service_tutorial.sim.plugins.ray_sensor import RaySensor
 from srv_interfaces.srv import GetModelList, SpawnModel
 
@@ -135,6 +136,36 @@ def test_camera_image_and_camera_info_of_a_ros1_camera(ros):
     focal = 160 / 2 / math.tan(1.0 / 2)
     assert list(info.k) == pytest.approx([focal, 0, 79.5, 0, focal, 59.5, 0, 0, 1])
     assert (info.width, info.height, info.distortion_model) == (160, 120, 'plumb_bob')
+
+
+def test_the_default_tinybots_ros2_camera_renders_at_its_rate_only_while_watched(ros):
+    world = SensorWorld(ros, real_time_factor=2.0)
+    # ROS 2: <camera_name>camera</camera_name> and no namespace.
+    assert {'/camera/image_raw', '/camera/camera_info'} <= world.topics()
+    camera = world.node.world.models['tinybot'].plugin(CameraSensor)
+    infos = []
+    info_subscription = ros.client_node.create_subscription(
+        CameraInfo, '/camera/camera_info', infos.append, 10)
+    images = world.receive(Image, '/camera/image_raw', count=4)
+    image = images[-1]
+    assert (image.width, image.height, image.encoding, image.step) == (320, 240, 'rgb8', 960)
+    assert image.header.frame_id == 'camera_link'
+    pixels = np.frombuffer(bytes(image.data), dtype=np.uint8).reshape(240, 320, 3)
+    assert pixels.std() > 10.0, 'the yard should not look like one flat colour'
+    # 10 Hz in simulation time, stamped with it.
+    stamps = [seconds(msg.header.stamp) for msg in images]
+    assert np.diff(stamps[1:]) == pytest.approx([0.1] * (len(stamps) - 2), abs=1e-6)
+    assert ros.wait_for(lambda: infos, timeout=10.0)
+    focal = 320 / 2 / math.tan(1.3962634 / 2)
+    assert list(infos[-1].k) == pytest.approx([focal, 0, 159.5, 0, focal, 119.5, 0, 0, 1])
+    assert infos[-1].header.frame_id == 'camera_link'
+    # Nobody watches any more: the camera stops rendering.
+    ros.client_node.destroy_subscription(info_subscription)
+    assert ros.wait_for(lambda: not camera.active, timeout=10.0)
+    last = camera.reading_time
+    start = world.node.world.time
+    assert ros.wait_for(lambda: world.node.world.time > start + 0.5)
+    assert camera.reading_time == last
 
 
 def test_imus_of_both_generations_read_gravity_up(ros):
