@@ -217,6 +217,25 @@ def test_imu_noise_and_its_covariance_come_from_the_block():
     assert imu.covariance('orientation') == pytest.approx([0.0025] * 3)
 
 
+def test_a_ros2_imus_per_axis_noise_and_its_covariance_come_from_the_block():
+    urdf = read(IMU_ROBOT).replace('<stddev>0.0</stddev>', '<stddev>0.02</stddev>')
+    urdf = urdf.replace('<update_rate>100</update_rate>', '<update_rate>0</update_rate>')
+    world = World()
+    world.spawn_urdf('imu_bot', urdf)
+    (ros2,) = (plugin for plugin in world.models['imu_bot'].plugins
+               if isinstance(plugin, ImuSensor) and plugin.config.name == 'imu_ros2')
+    samples = []
+    ros2.listener = lambda sensor: samples.append(sensor.angular_velocity.copy())
+    ros2.set_active(True)
+    world.step(400)
+    assert len(samples) == 400
+    # Only the z axis of the angular velocity is noisy, as the block says.
+    assert np.std(np.array(samples)[100:], axis=0) == pytest.approx([0.0, 0.0, 0.02],
+                                                                    rel=0.2, abs=1e-3)
+    assert ros2.covariance('angular_velocity') == pytest.approx([0.0, 0.0, 0.0004])
+    assert ros2.covariance('linear_acceleration') == pytest.approx([0.0, 0.0, 0.0])
+
+
 def test_tinybot_carries_a_laser_a_camera_and_an_imu():
     world = World()
     world.spawn_urdf_file('tinybot', os.path.join(os.path.dirname(HERE), 'models',
