@@ -76,6 +76,8 @@ def settled(name, **kwargs):
 def test_differential_drives_drive_and_turn_within_three_percent(name, linear_x, angular_z):
     # 1 m at 0.5 m/s, or 1 rad at 0.5 rad/s either way.
     turned, travelled = drive_and_stop(settled(name), name, linear_x, angular_z, 2.0)
+    print(f'\n{name}, linear.x {linear_x} angular.z {angular_z} for 2 s: travelled '
+          f'{travelled:.4f} m, turned {turned:.4f} rad')
     if linear_x:
         assert travelled == pytest.approx(1.0, rel=0.03)
         assert abs(turned) < 0.03
@@ -86,10 +88,12 @@ def test_differential_drives_drive_and_turn_within_three_percent(name, linear_x,
 
 def test_skid_steer_drives_straight_and_turns_the_commanded_way():
     _, travelled = drive_and_stop(settled('skidbot_ros1'), 'skidbot_ros1', 0.5, 0.0, 2.0)
+    print(f'\nskidbot_ros1, linear.x 0.5 for 2 s: travelled {travelled:.4f} m')
     assert travelled == pytest.approx(1.0, rel=0.03)
     for angular_z in (0.5, -0.5):
         turned, travelled = drive_and_stop(settled('skidbot_ros1'), 'skidbot_ros1', 0.0,
                                            angular_z, 2.0)
+        print(f'skidbot_ros1, angular.z {angular_z} for 2 s: turned {turned:.4f} rad')
         # The wheels skid sideways to turn: at least half the commanded 1 rad remains.
         assert 0.5 <= turned * math.copysign(1.0, angular_z) <= 1.03
         assert travelled < 0.03
