@@ -7,7 +7,8 @@ topics, where ros_names.plugin_topic() says gazebo_ros would put them: every dri
 odom and joint_states out, like gazebo_ros_diff_drive and gazebo_ros_skid_steer_drive), its
 odometry on /tf (tf_interface.py) and the sensors (sensor_interfaces.py). Each face is a class
 in PLUGIN_INTERFACES: a class method applies_to(plugin), a constructor (node, world, model,
-plugin, namespace), publish(stream, now) for the node's publication streams, and destroy().
+plugin, namespace), the node's publication streams it takes part in (streams) with
+publish(stream, now), look(wall_time) for a face that watches for subscribers, and destroy().
 """
 
 from geometry_msgs.msg import Twist
@@ -19,6 +20,7 @@ from service_tutorial.ros_names import plugin_topic
 from service_tutorial.sensor_interfaces import SENSOR_INTERFACES
 from service_tutorial.sim.plugins.diff_drive import DiffDrive, MAX_WHEEL_RIM_SPEED
 from service_tutorial.sim.plugins.drive_config import is_ros1_block
+from service_tutorial.sim.plugins.drive_config import ODOMETRY_SOURCE_ENCODER
 from service_tutorial.sim.validation import finite_number
 from service_tutorial.sim.validation import WorldError
 from service_tutorial.tf_interface import OdomTfInterface
@@ -39,6 +41,8 @@ def publishes_joint_states(drive):
 class DriveInterface:
     """A drive's topics (diff drive or skid steer): cmd_vel in, odom and joint_states out."""
 
+    streams = (ODOMETRY_STREAM, JOINT_STATES_STREAM)
+
     @classmethod
     def applies_to(cls, plugin):
         """Tell whether a plugin is a drive."""
@@ -58,6 +62,7 @@ class DriveInterface:
                                     ('joint_states', None)))
         self.cmd_vel_sub = node.create_subscription(
             Twist, cmd_vel_topic, self.cmd_vel_callback, 10)
+        self.encoder_odometry = config.odometry_source == ODOMETRY_SOURCE_ENCODER
         self.odom_pub = self.joint_states_pub = None
         self._publishers = {}
         if config.publish_odom:
@@ -77,15 +82,18 @@ class DriveInterface:
 
     def publish(self, stream, now):
         """Publish what belongs to a stream that fell due at simulation time now."""
+        if stream == ODOMETRY_STREAM and self.encoder_odometry:
+            # One arc per odometry period, whether anyone listens or not.
+            self.drive.integrate_encoders()
         publish = self._publishers.get(stream)
         if publish is not None:
             publish(now)
 
     def publish_odometry(self, now):
         """Publish the robot's odometry in its odometry frame (REP 105)."""
-        odometry = self.drive.odometry()  # integrates the encoders, always
         if self.odom_pub.get_subscription_count() == 0:
             return  # nobody would receive it: skip the message, the costly part
+        odometry = self.drive.odometry()
         msg = self.odom_msg
         fill_time_msg(msg.header.stamp, now)
         msg.header.frame_id = odometry.odometry_frame
@@ -152,11 +160,22 @@ class ModelInterface:
         except Exception:
             self.destroy()
             raise
+        # Each stream calls only the faces that publish on it: a fleet has hundreds of faces.
+        self._publishing = {}
+        for plugin in self.plugins:
+            for stream in plugin.streams:
+                self._publishing.setdefault(stream, []).append(plugin)
+        self._watching = [plugin for plugin in self.plugins if hasattr(plugin, 'look')]
 
     def publish(self, stream, now):
         """Publish each plugin's part of a stream that fell due at simulation time now."""
-        for plugin in self.plugins:
+        for plugin in self._publishing.get(stream, ()):
             plugin.publish(stream, now)
+
+    def look(self, wall_time):
+        """Let the faces that watch their topics see whether anyone subscribes."""
+        for plugin in self._watching:
+            plugin.look(wall_time)
 
     def destroy(self):
         """Remove every topic of the model from the node."""

@@ -14,6 +14,7 @@ effect as soon as it is set. What the simulation logs reaches the node's logger 
 """
 
 import os
+import time
 
 from ament_index_python.packages import get_package_share_directory
 from rclpy.clock import Clock as WallClock, ClockType
@@ -39,6 +40,8 @@ from srv_interfaces.srv import SpawnModel
 from std_srvs.srv import Empty
 
 PACKAGE = 'service_tutorial'
+# Wall time between two looks of the sensor faces for subscribers and for holds that end, in s.
+FACE_LOOK_PERIOD = 0.01
 # As gazebo_ros publishes /clock: the latest time waits for every subscriber, a late one too.
 CLOCK_QOS = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
                        durability=DurabilityPolicy.TRANSIENT_LOCAL)
@@ -113,6 +116,7 @@ class MujocoWorld(Node):
                                     for stream, name in RATE_PARAMETERS.items()})
         self._clock_msg = Clock()
         self.models = {}  # name -> ModelInterface, in spawn order
+        self._next_face_look = 0.0  # wall time
         self.robot_descriptions = {}  # name -> RobotDescriptionPublisher, models with topics
         self.viewer = None
 
@@ -220,6 +224,11 @@ class MujocoWorld(Node):
             else:
                 for model in self.models.values():
                     model.publish(stream, now)
+        wall = time.monotonic()
+        if wall >= self._next_face_look:
+            self._next_face_look = wall + FACE_LOOK_PERIOD
+            for model in self.models.values():
+                model.look(wall)
         self.camera_stream.publish_due(now)
 
     def publish_clock(self):

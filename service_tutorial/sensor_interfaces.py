@@ -4,7 +4,7 @@ The ROS faces of the sensor plugins: sensor_msgs LaserScan, Image with CameraInf
 A face makes its sensor active while one of its topics has a subscriber, and publishes each
 reading the sensor hands it, stamped with the simulation time of the reading: nothing is
 measured or built for a topic nobody listens to. It looks for subscribers a few times per wall
-second, when the node publishes its streams (as the world's camera does), rather than through
+second, when the world node has it look (at most every FACE_LOOK_PERIOD), rather than through
 matched events: each event handler is one more entity every executor turn waits on, and with
 four per robot a fleet of 50 ran a quarter slower.
 Free-running (real_time_factor 0), a sensor is also held to its rate in wall time, as the
@@ -258,6 +258,7 @@ class SensorInterface:
 
     sensor_type = None  # the Sensor plugin class
     face_type = None  # the SensorFace class that publishes its readings
+    streams = ()  # readings are published as the sensor makes them, not on the node's streams
 
     @classmethod
     def applies_to(cls, plugin):
@@ -268,9 +269,8 @@ class SensorInterface:
         """Give the sensor its topics, in the model's namespace."""
         self.faces = [self.face_type(node, plugin, namespace)]
 
-    def publish(self, stream, now):
-        """On the node's streams: look for subscribers, and end the holds that are due."""
-        wall_time = time.monotonic()
+    def look(self, wall_time):
+        """Look for subscribers, and end the holds that are due by wall_time."""
         for face in self.faces:
             face.check(wall_time)
 

@@ -37,6 +37,8 @@ def make_tf_publisher(node):
 class OdomTfInterface:
     """A drive's odometry frame -> robot base frame on /tf, in step with its odom topic."""
 
+    streams = (ODOMETRY_STREAM,)
+
     @classmethod
     def applies_to(cls, plugin):
         """Tell whether a plugin is a drive that asks for its odometry on /tf."""
@@ -52,12 +54,10 @@ class OdomTfInterface:
 
     def publish(self, stream, now):
         """Send the transform when odometry falls due at simulation time now."""
-        if stream != ODOMETRY_STREAM:
-            return
-        # The drive face asked for the same odometry a moment ago: the same values come back.
-        odometry = self.drive.odometry()
         if self.tf_pub.get_subscription_count() == 0:
             return
+        # Encoder odometry integrated a moment ago by the drive face gives the same values.
+        odometry = self.drive.odometry()
         transform = self.transform
         fill_time_msg(transform.header.stamp, now)
         transform.header.frame_id = odometry.odometry_frame

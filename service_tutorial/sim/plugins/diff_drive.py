@@ -225,7 +225,7 @@ class DiffDrive(Plugin):
         if fastest_rim > MAX_WHEEL_RIM_SPEED:
             scale = MAX_WHEEL_RIM_SPEED / fastest_rim
             linear_x, angular_z, rims = linear_x * scale, angular_z * scale, rims * scale
-        self._update_encoder()
+        self.integrate_encoders()
         self._set_wheel_targets(rims / self._radii)
         self.commanded_at = self.world.data.time
         self.set_timeout(self.world.cmd_vel_timeout)
@@ -267,7 +267,7 @@ class DiffDrive(Plugin):
             data.ctrl[self._actuator_ids[index]] = 0.0
             self.ramp_end[index] = math.inf
         if self.expiry <= now:
-            self._update_encoder()
+            self.integrate_encoders()
             self._set_wheel_targets(np.zeros(len(self.targets)))
             self.expiry = math.inf
             self.commanded_at = None
@@ -287,7 +287,8 @@ class DiffDrive(Plugin):
         self.origin_position = base.position
         self.origin_orientation = base.orientation
 
-    def _update_encoder(self):
+    def integrate_encoders(self):
+        """Add the wheel turns since the last call to encoder odometry, whoever reads it."""
         qpos = self.world.data.qpos
         self.encoder.update(*(qpos[address] for address in self._wheel_qpos_adr))
 
@@ -295,7 +296,7 @@ class DiffDrive(Plugin):
         """Return the robot's odometry, from its first pair's encoders or from ground truth."""
         config = self.config
         if config.odometry_source == ODOMETRY_SOURCE_ENCODER:
-            self._update_encoder()
+            self.integrate_encoders()
             encoder = self.encoder
             qvel = self.world.data.qvel
             linear_x, angular_z = body_velocity(
