@@ -134,6 +134,8 @@ def action_world(ros):
 
 def test_a_quarter_turn_left_ends_on_target_with_rising_feedback(action_world):
     status, result, feedback, turned = action_world.turn(math.pi / 2, 0.5)
+    print(f'\npi/2 at 0.5 rad/s: turned {turned:.4f} rad by ground truth '
+          f'({100.0 * (turned / (math.pi / 2) - 1.0):+.2f} %), result {result.angle_turned:.4f}')
 
     assert status == GoalStatus.STATUS_SUCCEEDED
     assert result.success
@@ -159,6 +161,8 @@ def test_a_quarter_turn_left_ends_on_target_with_rising_feedback(action_world):
 
 def test_one_and_a_half_turns_clockwise_are_counted_unwrapped(action_world):
     status, result, feedback, turned = action_world.turn(-3 * math.pi, 1.5)
+    print(f'\n-3 pi at 1.5 rad/s: turned {turned:.4f} rad by ground truth '
+          f'({100.0 * (turned / (-3 * math.pi) - 1.0):+.2f} %), {len(feedback)} feedback messages')
 
     assert status == GoalStatus.STATUS_SUCCEEDED
     assert result.success
@@ -198,6 +202,9 @@ def test_a_cancel_stops_tinybot_at_once_and_returns_what_was_turned(action_world
     after = [(time, rate) for time, rate in truth.samples[first_sample:]
              if time >= accepted_at + 0.2]
     assert after and after[0][0] <= accepted_at + 0.5
+    print(f'\ncancel: largest yaw rate from 0.2 s after it '
+          f'{max(abs(rate) for _, rate in after):.4f} rad/s; result {result.angle_turned:.4f} '
+          f'rad, ground truth {truth.turned:.4f} rad')
     assert all(abs(rate) < 0.05 for _, rate in after), after
     assert status == GoalStatus.STATUS_CANCELED
     assert not result.success
