@@ -23,6 +23,7 @@ from sensor_msgs.msg import JointState
 from service_tutorial.conversions import seconds_of as seconds, yaw_of
 from service_tutorial.mujoco_world import left_out_of
 from service_tutorial.spawn_model_client import split_xacro_arguments
+import test_world_node
 from test_world_node import lesson_pose, WorldClient
 
 pytestmark = pytest.mark.ros
@@ -103,6 +104,11 @@ def wheel_spacing(world, left_body, right_body):
     return float(np.linalg.norm(data.body(left_body).xpos - data.body(right_body).xpos))
 
 
+# The world node's fixtures, shared with its own tests.
+fast_world = test_world_node.fast_world
+real_time_world = test_world_node.real_time_world
+
+
 def settle(world, name):
     """Wait until a model has come to rest; return its state."""
     for _ in range(20):
@@ -113,16 +119,6 @@ def settle(world, name):
         if max(abs(speed) for speed in speeds) < 0.005:
             return state
     pytest.fail(f'{name} did not come to rest: {state.twist}')
-
-
-@pytest.fixture
-def fast_world(ros):
-    return WorldClient(ros, real_time_factor=0.0)
-
-
-@pytest.fixture
-def real_time_world(ros):
-    return WorldClient(ros, real_time_factor=1.0)
 
 
 def test_the_answer_says_which_meshes_and_plugins_were_left_out():

@@ -47,6 +47,14 @@ class SensorWorld:
     def topics(self):
         return {publisher.topic_name for publisher in self.node.publishers}
 
+    def assert_stops(self, sensor):
+        """Wait until the world sees nobody listens to a sensor; then it measures no more."""
+        assert self.ros.wait_for(lambda: not sensor.active, timeout=10.0)
+        last = sensor.reading_time
+        start = self.node.world.time
+        assert self.ros.wait_for(lambda: self.node.world.time > start + 0.5)
+        assert sensor.reading_time == last
+
     def receive(self, msg_type, topic, count=1, timeout=30.0):
         """Subscribe, wait for count messages, unsubscribe; return them."""
         received = []
@@ -85,11 +93,7 @@ def test_laser_scan_on_its_topic_only_while_someone_listens(ros):
     stamps = [seconds(msg.header.stamp) for msg in scans]
     assert np.diff(stamps[1:]) == pytest.approx([0.1] * (len(stamps) - 2), abs=1e-6)
     # The subscriber left: the laser stops (the world hears of it, then scans no more).
-    assert ros.wait_for(lambda: not laser.active, timeout=10.0)
-    last = laser.reading_time
-    start = world.node.world.time
-    assert ros.wait_for(lambda: world.node.world.time > start + 0.5)
-    assert laser.reading_time == last
+    world.assert_stops(laser)
 
 
 def test_free_running_a_sensor_is_held_to_its_rate_in_wall_time_too(ros):
@@ -161,11 +165,7 @@ def test_the_default_tinybots_ros2_camera_renders_at_its_rate_only_while_watched
     assert infos[-1].header.frame_id == 'camera_link'
     # Nobody watches any more: the camera stops rendering.
     ros.client_node.destroy_subscription(info_subscription)
-    assert ros.wait_for(lambda: not camera.active, timeout=10.0)
-    last = camera.reading_time
-    start = world.node.world.time
-    assert ros.wait_for(lambda: world.node.world.time > start + 0.5)
-    assert camera.reading_time == last
+    world.assert_stops(camera)
 
 
 def test_imus_of_both_generations_read_gravity_up(ros):
