@@ -24,8 +24,11 @@ EXPECTED_ROWS = {
     'real_time': len(QUICK.robot_counts),
     'startup': 1,
     'turning': len(QUICK.durations) * len(QUICK.velocities),
-    'targets': 1 + 2 * len(QUICK.robot_counts) + 1 + 1,
+    'targets': (1 + 2 * len(QUICK.growth_counts) + 6 * len(QUICK.cost_counts) + 1
+                + 3 * len(QUICK.robot_counts) + 1 + 1),
     'core': 2,
+    # cold spawn, warm spawn and delete of two robots per world size, and the box sequence
+    'spawn_cost': 6 * len(QUICK.cost_counts) + 1,
     'camera': 1,
     'sensors': 5,
     'answers': 3,
