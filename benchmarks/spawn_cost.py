@@ -61,8 +61,11 @@ class BareWorld:
     def attach(self, urdf, name, position):
         """Attach a robot from URDF text under the prefix '<name>::'; return body, frame."""
         child = mujoco.MjSpec.from_string(urdf)
+        # MuJoCo's URDF import fixes the root to the world; the World's robots move freely.
+        root = child.worldbody.first_body()
+        root.add_freejoint()
         frame = self.spec.worldbody.add_frame(pos=position)
-        return frame.attach_body(child.worldbody.first_body(), name + '::', ''), frame
+        return frame.attach_body(root, name + '::', ''), frame
 
     def spawn(self, urdf, name, position):
         """Attach a robot and recompile; return what delete() needs."""
@@ -166,6 +169,6 @@ COLUMNS = [('figure', ''), ('models present', 'd'), ('calls', 'd'), ('World p50 
            ('MuJoCo p50 ms', '.3f'), ('ratio', '.2f'), ('limit', '.1f'), ('within', '')]
 NOTE = ('World: spawn_urdf / delete_model on a ROS-free World holding that many tinybots. '
         "MuJoCo: MuJoCo's own path on a bare MjSpec (ground plane, no sky or textures) holding "
-        'as many tinybots from MjSpec.from_string: from_string + attach_body + recompile; '
-        'spec.delete + recompile. cold: every spawn a URDF text not seen before; warm: the '
+        'as many tinybots from MjSpec.from_string: from_string + a free joint on the root (as '
+        'the World gives it) + attach_body + recompile; spec.delete + recompile. cold: every spawn a URDF text not seen before; warm: the '
         'same text again. The box row gives totals in ms, not p50s.')
