@@ -79,8 +79,9 @@ class Model:
         else:
             position, orientation = np.array(self.frame.pos), np.array(self.frame.quat)
         self.frame = spec.worldbody.add_frame(pos=position, quat=orientation)
-        # Attaching renames the robot's own spec too; a copy keeps the description as loaded.
-        self.frame.attach_body(self.description.spec.copy().worldbody.first_body(),
+        # The world's spec copies what it attaches (copy_during_attach), so the description,
+        # shared by every model spawned from the same URDF, stays as it was loaded.
+        self.frame.attach_body(self.description.spec.worldbody.first_body(),
                                self.name + SCOPE_SEPARATOR, '')
 
     def bind(self, world):

@@ -53,6 +53,8 @@ def make_scene(timestep, gravity, scenery=None):
     """Return the spec of a world without models: physics options, ground, sky, sun, scenery."""
     spec = mujoco.MjSpec()
     spec.modelname = 'service_tutorial'
+    # Attaching copies the robot, so its description stays as loaded for the next spawn.
+    spec.copy_during_attach = True
     spec.compiler.degree = False
     spec.compiler.inertiafromgeom = mujoco.mjtInertiaFromGeom.mjINERTIAFROMGEOM_FALSE
     option = spec.option

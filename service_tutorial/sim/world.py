@@ -17,12 +17,12 @@ from service_tutorial.sim import frames
 from service_tutorial.sim import plugins
 from service_tutorial.sim import scene
 from service_tutorial.sim import validation
+from service_tutorial.sim.description_cache import DescriptionCache
 from service_tutorial.sim.frames import ModelState
 from service_tutorial.sim.model import Model
 from service_tutorial.sim.recovery import Recovery
 from service_tutorial.sim.recovery import take_steps
 from service_tutorial.sim.scenery import Scenery
-from service_tutorial.sim.urdf.builder import load_urdf
 from service_tutorial.sim.urdf.hardened_xml import MAX_MODEL_XML_BYTES
 from service_tutorial.sim.urdf.hardened_xml import UrdfError
 from service_tutorial.sim.validation import quoted
@@ -88,6 +88,7 @@ class World:
         self._package_resolver = package_resolver
         self._paused = False
         self._models = {}
+        self._descriptions = DescriptionCache(package_resolver, timestep)
         self._next_event = math.inf
         self._kinematics_fresh = False
         # What every spec the world builds starts from: physics options, ground, scenery.
@@ -182,9 +183,7 @@ class World:
         world_position, world_orientation = frames.compose(
             frame.position, frame.orientation, position, orientation)
         try:
-            description = load_urdf(urdf_xml, base_dir=base_dir,
-                                    package_resolver=self._package_resolver,
-                                    timestep=self._timestep)
+            description = self._descriptions.load(urdf_xml, base_dir)
         except UrdfError as error:
             raise WorldError(str(error)) from None
         model = Model(name, description, world_position, world_orientation)
