@@ -84,6 +84,25 @@ class Model:
         self.frame.attach_body(self.description.spec.worldbody.first_body(),
                                self.name + SCOPE_SEPARATOR, '')
 
+    def detach(self, spec):
+        """
+        Delete everything attach() brought to the spec.
+
+        Deleting the frame deletes the bodies attached to it and the actuators, sensors and
+        excludes that name them; the assets and the default class the attach brought along go
+        by name. Each delete costs MuJoCo a pass over the whole spec, hence one for the tree.
+        """
+        spec.delete(self.frame)
+        robot = self.description.spec
+        for assets, find in ((robot.meshes, spec.mesh), (robot.materials, spec.material),
+                             (robot.textures, spec.texture)):
+            for asset in assets:
+                spec.delete(find(self.scoped(asset.name)))
+        default = spec.find_default(self.scoped(robot.default.name))
+        if default is not None:
+            spec.delete(default)
+        self.frame = None
+
     def bind(self, world):
         """Find the model's elements in the world's compiled model, then its plugins'."""
         mj_model = world.model
@@ -129,6 +148,11 @@ class Model:
         """Return a copy of the model's share of the integration state, by MjData field."""
         return {field: getattr(data, field)[self._state_index(field)].copy()
                 for field in fields}
+
+    def state_without(self, data):
+        """Return a copy of the integration state by MjData field, without the model's share."""
+        return {field: np.delete(getattr(data, field), self._state_index(field))
+                for field in STATE_FIELDS}
 
     def restore_state(self, data, saved):
         """Write a share of the integration state saved by saved_state() back."""

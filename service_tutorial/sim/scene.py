@@ -53,7 +53,8 @@ def make_scene(timestep, gravity, scenery=None):
     """Return the spec of a world without models: physics options, ground, sky, sun, scenery."""
     spec = mujoco.MjSpec()
     spec.modelname = 'service_tutorial'
-    # Attaching copies the robot, so its description stays as loaded for the next spawn.
+    # Attaching copies the robot: its description stays as loaded, and deleting the robot
+    # from the spec later frees all of it.
     spec.copy_during_attach = True
     spec.compiler.degree = False
     spec.compiler.inertiafromgeom = mujoco.mjtInertiaFromGeom.mjINERTIAFROMGEOM_FALSE

@@ -61,6 +61,21 @@ def _restore_state(models, data, saved):
         models[name].restore_state(data, values)
 
 
+def _recompile(spec, mj_model, data, leaving):
+    """
+    Recompile a spec a model left; return the new model and data, the others' state carried.
+
+    Every other model's entries in MuJoCo's state arrays stay in order, so the state before,
+    without the leaving model's share, is the state after. MuJoCo 4 carries all of it over
+    itself; older versions carry positions, velocities and controls only.
+    """
+    kept = leaving.state_without(data)
+    mj_model, data = spec.recompile(mj_model, data)
+    for field, values in kept.items():
+        getattr(data, field)[:] = values
+    return mj_model, data
+
+
 class World:
     """
     A MuJoCo world with a ground plane into which URDF robots are spawned and deleted.
@@ -228,19 +243,20 @@ class World:
 
     def delete_model(self, name):
         """Remove a model; every other model keeps its state."""
-        self._spawned(name)
-        self.rebuild({other: model for other, model in self._models.items() if other != name})
+        model = self._spawned(name)
+        model.detach(self._spec)
+        del self._models[name]
+        try:
+            self._model, self._data = _recompile(self._spec, self._model, self._data, model)
+        except Exception:
+            self.rebuild(self._models)
+            return
+        self._after_recompile()
+        self.forward()
         _logger.info("deleted model '%s'", name)
 
     def rebuild(self, models):
-        """
-        Build the spec, model and data afresh, holding just the given models (name -> Model).
-
-        A spec keeps a copy of every robot ever attached to it, deleted or not, so deleting
-        from the live spec would make a long-running world grow without bound. A fresh spec
-        holds only the live robots; their integration state is carried over, so the
-        simulation goes on exactly as if the spec had been edited in place.
-        """
+        """Build spec, model and data afresh with just the given models, their state kept."""
         spec = scene.make_scene(*self._scene)
         for model in models.values():
             model.attach(spec)
