@@ -21,7 +21,8 @@ class Model:
     A spawned robot: its name, its URDF description, where it was spawned, and its plugins.
 
     Its bodies, joints and actuators carry the prefix '<name>::' in the world's MuJoCo model;
-    the world calls bind() after every recompile, which finds them again by name.
+    the world calls bind() whenever their ids in the compiled model may have changed, which
+    finds them again by name.
     """
 
     def __init__(self, name, description, position, orientation):
