@@ -90,27 +90,25 @@ def _timed(function, *args, **kwargs):
     return time.perf_counter() - start, result
 
 
-def _world_cycles(world, urdf, base_dir, calls, kind):
-    spawns, deletes = [], []
+def _cycles(world, bare, urdf, base_dir, calls, kind):
+    """
+    Spawn and delete on the World and on the bare spec in turns; return the four timings.
+
+    Taking turns, both see the same load from anything else running on the machine.
+    """
+    timings = {'world spawn': [], 'world delete': [], 'bare spawn': [], 'bare delete': []}
     for index in range(calls):
         text = new_text(urdf, index) if kind == COLD else urdf
         spawn, _ = _timed(world.spawn_urdf, 'spawned', text, position=SPAWN_POSITION,
                           base_dir=base_dir)
         delete, _ = _timed(world.delete_model, 'spawned')
-        spawns.append(spawn)
-        deletes.append(delete)
-    return spawns, deletes
-
-
-def _bare_cycles(bare, urdf, calls, kind):
-    spawns, deletes = [], []
-    for index in range(calls):
-        text = new_text(urdf, index) if kind == COLD else urdf
+        timings['world spawn'].append(spawn)
+        timings['world delete'].append(delete)
         spawn, spawned = _timed(bare.spawn, text, 'spawned', SPAWN_POSITION)
         delete, _ = _timed(bare.delete, spawned)
-        spawns.append(spawn)
-        deletes.append(delete)
-    return spawns, deletes
+        timings['bare spawn'].append(spawn)
+        timings['bare delete'].append(delete)
+    return timings
 
 
 def spawn_rows(make_world, read_model, model_dir, fleet_position, present, calls):
@@ -122,17 +120,15 @@ def spawn_rows(make_world, read_model, model_dir, fleet_position, present, calls
         urdf = read_model(robot)
         world = make_world(present)
         bare = BareWorld(fleet_urdf, positions)
-        # One cycle each first: the first spawn of a process pays for imports and caches.
-        _world_cycles(world, urdf, model_dir, 1, COLD)
-        _bare_cycles(bare, urdf, 1, COLD)
+        # One cycle first: the first spawn of a process pays for imports and caches.
+        _cycles(world, bare, urdf, model_dir, 1, COLD)
         for kind in (COLD, WARM):
-            world_spawns, world_deletes = _world_cycles(world, urdf, model_dir, calls, kind)
-            bare_spawns, bare_deletes = _bare_cycles(bare, urdf, calls, kind)
-            rows.append(_row(f'{kind} spawn {robot}', present, calls, world_spawns,
-                             bare_spawns, SPAWN_LIMITS[kind]))
+            timings = _cycles(world, bare, urdf, model_dir, calls, kind)
+            rows.append(_row(f'{kind} spawn {robot}', present, calls, timings['world spawn'],
+                             timings['bare spawn'], SPAWN_LIMITS[kind]))
             if kind == WARM:
-                rows.append(_row(f'delete {robot}', present, calls, world_deletes,
-                                 bare_deletes, DELETE_LIMIT))
+                rows.append(_row(f'delete {robot}', present, calls, timings['world delete'],
+                                 timings['bare delete'], DELETE_LIMIT))
     return rows
 
 
