@@ -55,9 +55,12 @@ class OdomTfInterface:
         """Send the transform when odometry falls due at simulation time now."""
         if stream != ODOMETRY_STREAM:
             return
+        listened = self.tf_pub.get_subscription_count() > 0
+        if not listened and self.drive.config.publish_odom:
+            return  # the drive face integrates the encoders; nobody wants the transform
         # The drive face asked for the same odometry a moment ago: the same values come back.
         odometry = self.drive.odometry()
-        if self.tf_pub.get_subscription_count() == 0:
+        if not listened:
             return
         transform = self.transform
         fill_time_msg(transform.header.stamp, now)
