@@ -166,5 +166,6 @@ COLUMNS = [('figure', ''), ('models present', 'd'), ('calls', 'd'), ('World p50 
 NOTE = ('World: spawn_urdf / delete_model on a ROS-free World holding that many tinybots. '
         "MuJoCo: MuJoCo's own path on a bare MjSpec (ground plane, no sky or textures) holding "
         'as many tinybots from MjSpec.from_string: from_string + a free joint on the root (as '
-        'the World gives it) + attach_body + recompile; spec.delete + recompile. cold: every spawn a URDF text not seen before; warm: the '
-        'same text again. The box row gives totals in ms, not p50s.')
+        'the World gives it) + attach_body + recompile; spec.delete + recompile. The two take '
+        'turns. cold: every spawn a URDF text not seen before; warm: the same text again. The '
+        'box row gives totals in ms, not p50s.')

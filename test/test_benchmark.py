@@ -38,7 +38,7 @@ EXPECTED_ROWS = {
 def check_cell(table, heading, fmt, value):
     """Numeric columns hold finite numbers, 'within' columns booleans, text columns text."""
     where = f'{table.key}[{heading}]'
-    if heading in ('within', 'holds'):
+    if heading in ('within', 'holds') or heading.endswith(' within'):
         assert isinstance(value, bool), where
     elif fmt:
         assert isinstance(value, (int, float)) and not isinstance(value, bool), where

@@ -50,8 +50,8 @@ class DescriptionCache:
             self._kept[key] = kept
             return kept[0]
         description = load_urdf(urdf_xml, base_dir=base_dir,
-                                 package_resolver=self._package_resolver,
-                                 timestep=self._timestep)
+                                package_resolver=self._package_resolver,
+                                timestep=self._timestep)
         stamps = _mesh_stamps(description.mesh_files)
         if not description.missing_meshes and stamps is not None:
             self._kept[key] = (description, stamps)

@@ -7,15 +7,15 @@ from service_tutorial.sim.urdf.builder import CONTACT_TIME_CONSTANT
 
 # The ground's grid and the sky, as MuJoCo's builtin textures draw them.
 _TEXTURES = (
-    dict(name='ground_grid', type=mujoco.mjtTexture.mjTEXTURE_2D,
-         builtin=mujoco.mjtBuiltin.mjBUILTIN_CHECKER, mark=mujoco.mjtMark.mjMARK_EDGE,
-         rgb1=[0.25, 0.27, 0.3], rgb2=[0.32, 0.34, 0.37], markrgb=[0.6, 0.6, 0.6], width=256,
-         height=256),
+    {'name': 'ground_grid', 'type': mujoco.mjtTexture.mjTEXTURE_2D,
+     'builtin': mujoco.mjtBuiltin.mjBUILTIN_CHECKER, 'mark': mujoco.mjtMark.mjMARK_EDGE,
+     'rgb1': [0.25, 0.27, 0.3], 'rgb2': [0.32, 0.34, 0.37], 'markrgb': [0.6, 0.6, 0.6],
+     'width': 256, 'height': 256},
     # A smooth gradient: at 64 texels a face it renders within 2 levels of 255 of what 256
     # give, and the sky is 16 times fewer bytes for every compile to copy (0.4 ms at 256).
-    dict(name='sky', type=mujoco.mjtTexture.mjTEXTURE_SKYBOX,
-         builtin=mujoco.mjtBuiltin.mjBUILTIN_GRADIENT, rgb1=[0.55, 0.68, 0.82],
-         rgb2=[0.1, 0.12, 0.15], width=64, height=384),
+    {'name': 'sky', 'type': mujoco.mjtTexture.mjTEXTURE_SKYBOX,
+     'builtin': mujoco.mjtBuiltin.mjBUILTIN_GRADIENT, 'rgb1': [0.55, 0.68, 0.82],
+     'rgb2': [0.1, 0.12, 0.15], 'width': 64, 'height': 384},
 )
 
 
