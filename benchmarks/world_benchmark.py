@@ -40,6 +40,7 @@ import time
 
 import mujoco
 import numpy as np
+import spawn_cost
 import yaml
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
@@ -89,6 +90,9 @@ class Config:
     turning_check_rtfs: tuple = (1.0, 2.0, 5.0, 0.0)  # real_time_factor check of one turn
     turning_check_point: tuple = (2, 1.0)  # (s, rad/s) of that check
     core_spawns: int = 5                   # R2-D2s spawned into a World in this process
+    cost_counts: tuple = (1, 50)           # tinybots present for the spawn-cost rows
+    cost_calls: int = 20                   # spawn/delete cycles per spawn-cost row
+    box_count: int = 200                   # boxes spawned, then deleted, in the box row
     step_rounds: int = 5                   # World.step against bare mj_step, best of
     step_count: int = 1000                 # steps per round
     camera_window: float = 2.0             # wall s of streaming camera measured
@@ -101,8 +105,8 @@ QUICK = Config(calls=5, growth_counts=(1, 2), growth_calls=3, robot_counts=(1,),
                speed_window=0.3, speed_rounds=1, speed_settle=0.1, real_time_window=0.3,
                warm_up=0.2, startup_runs=1,
                durations=(1,), velocities=(0.5,), turning_rtf=4.0, turning_check_rtfs=(),
-               core_spawns=3, step_rounds=2, step_count=200, camera_window=0.3,
-               scan_repeats=20, camera_frames=2)
+               core_spawns=3, cost_counts=(1, 2), cost_calls=3, box_count=5, step_rounds=2,
+               step_count=200, camera_window=0.3, scan_repeats=20, camera_frames=2)
 
 
 @dataclass
@@ -606,19 +610,22 @@ def growth_table(observer, config):
     table = Table('spawn_growth', 'Spawn R2-D2 as the world grows (ms)', [
         ('models present', 'd'), ('calls', 'd'), ('spawn p50', '.2f'), ('core spawn p50', '.2f'),
         ('delete p50', '.2f'), ('core delete p50', '.2f'), ('Trigger p50', '.2f'),
-        ('limit p50', '.2f'), ('within', '')])
+        ('spawn limit', '.2f'), ('within', ''), ('delete limit', '.2f'), ('delete within', '')])
     for count in config.growth_counts:
         core = core_round_trips(count, config.growth_calls, with_reset=False)
         with quiet_console(config.log_path):
             node = node_round_trips(observer, count, config.growth_calls, with_reset=False)
         spawn_p50, core_spawn_p50 = median_ms(node['spawn']), median_ms(core['spawn'])
+        delete_p50, core_delete_p50 = median_ms(node['delete']), median_ms(core['delete'])
         trivial_p50 = median_ms(node['trigger'])
-        limit = trivial_p50 + 2.0 * core_spawn_p50
-        table.rows.append([count, len(node['spawn']), spawn_p50, core_spawn_p50,
-                           median_ms(node['delete']), median_ms(core['delete']), trivial_p50,
-                           limit, spawn_p50 <= limit])
+        spawn_limit = core_spawn_p50 + 2.0 * trivial_p50
+        delete_limit = core_delete_p50 + 2.0 * trivial_p50
+        table.rows.append([count, len(node['spawn']), spawn_p50, core_spawn_p50, delete_p50,
+                           core_delete_p50, trivial_p50, spawn_limit, spawn_p50 <= spawn_limit,
+                           delete_limit, delete_p50 <= delete_limit])
     table.note = ('every spawn recompiles the whole model, so its cost grows with the world; '
-                  'limit as above')
+                  'limit = core p50 + 2 x Trigger p50 (the service may cost two trivial round '
+                  'trips more than the same operation on World)')
     return table
 
 
@@ -743,7 +750,7 @@ def free_running_rounds(observer, count, config):
             world.fleet.drive_for(config.speed_settle)
             node_speed, node_cpu, clock_rate, odom_rate = world.window(config.speed_window)
             rounds.append((node_speed, raw_speed, node_speed / raw_speed, node_cpu / raw_cpu,
-                           clock_rate, odom_rate))
+                           clock_rate, odom_rate, raw_cpu))
     return [statistics.median(column) for column in zip(*rounds)]
 
 
@@ -758,9 +765,10 @@ def speed_tables(observer, config):
     real_time = Table('real_time', 'Real time, real_time_factor 1', [
         ('robots', 'd'), ('achieved factor', '.4f'), ('error %', '.2f'), ('limit %', '.1f'),
         ('within', ''), ('raw mj_step x real time', '.1f'), ('world CPU %', '.0f'),
+        ('raw mj_step CPU %', '.1f'), ('CPU limit %', '.1f'), ('CPU within', ''),
         ('/clock msgs/s', '.0f'), ('bot0 odom msgs/s', '.0f')])
     for count in config.robot_counts:
-        node, raw, ratio, cpu_ratio, clock_rate, odom_rate = free_running_rounds(
+        node, raw, ratio, cpu_ratio, clock_rate, odom_rate, raw_cpu = free_running_rounds(
             observer, count, config)
         target = 0.7 if count == 1 else 0.8
         speed.rows.append([count, node, raw, ratio, target, ratio >= target, cpu_ratio,
@@ -770,8 +778,12 @@ def speed_tables(observer, config):
             factor, per_cpu_second, clock_rate, odom_rate = world.window(
                 config.real_time_window)
         error = 100.0 * (factor - 1.0)
-        real_time.rows.append([count, factor, error, 1.0, abs(error) <= 1.0, raw,
-                               100.0 * factor / per_cpu_second, clock_rate, odom_rate])
+        world_cpu = 100.0 * factor / per_cpu_second
+        raw_cpu_percent = 100.0 / raw_cpu  # a core's share that steps 1 simulated s per s
+        cpu_limit = 2.0 * raw_cpu_percent
+        real_time.rows.append([count, factor, error, 1.0, abs(error) <= 1.0, raw, world_cpu,
+                               raw_cpu_percent, cpu_limit, world_cpu <= cpu_limit, clock_rate,
+                               odom_rate])
     speed.note = ('world node: the mujoco_world executable in its own process, every robot '
                   'driving on /cmd_vel, /clock and bot0/odom subscribed to here (msgs/s: what '
                   'arrived per wall s). raw mj_step: the same fleet compiled in this process, '
@@ -783,7 +795,9 @@ def speed_tables(observer, config):
     real_time.note = ('achieved factor over the window from get_model_state stamps; raw '
                       'mj_step x real time is how much faster than real time the physics '
                       'alone could run (from the free-running rows); world CPU %: CPU time '
-                      'of the world process per wall second')
+                      'of the world process per wall second; raw mj_step CPU %: the CPU share '
+                      'bare mj_step of the same fleet needs for real time (from its simulated '
+                      's per CPU s in the free-running rows); CPU limit: twice that')
     return speed, real_time
 
 
@@ -983,6 +997,22 @@ def core_table(config):
          f'{config.step_count} steps', ratio, 1.5, ratio < 1.5]]
     table.note = ('the world grows by one R2-D2 a spawn; World.step and mj_step step the same '
                   'model from the same state (they stay bit for bit equal, see test_world.py)')
+    return table
+
+
+def spawn_cost_table(config):
+    """Spawn and delete on a World in this process against MuJoCo's own path, no ROS."""
+    def make_world(present):
+        return core_fleet(present, driving=False)
+
+    table = Table('spawn_cost', "Spawn and delete on World, no ROS, against MuJoCo's own path",
+                  list(spawn_cost.COLUMNS))
+    model_dir = os.path.dirname(model_path('r2d2'))
+    for present in config.cost_counts:
+        table.rows += spawn_cost.spawn_rows(make_world, read_model, model_dir, fleet_position,
+                                            present, config.cost_calls)
+    table.rows.append(spawn_cost.box_row(make_world, config.box_count))
+    table.note = spawn_cost.NOTE
     return table
 
 
@@ -1206,13 +1236,23 @@ def answers_table(observer, config):
 
 
 def targets(tables):
-    """Return the targets of issue 5 with their measured values and whether they hold."""
+    """Return the targets of issues 5 and 15 with their measured values and whether they hold."""
     rows = []
     by_key = {table.key: table for table in tables}
     if 'round_trips' in by_key:
         spawn = by_key['round_trips'].rows[0]
         rows.append(['spawn p50 <= Trigger p50 + 2 x core spawn p50 (ms)', spawn[2], spawn[8],
                      spawn[9]])
+    if 'spawn_growth' in by_key:
+        for row in by_key['spawn_growth'].rows:
+            rows.append([f'service spawn p50 <= core + 2 x Trigger, {row[0]} present (ms)',
+                         row[2], row[7], row[8]])
+            rows.append([f'service delete p50 <= core + 2 x Trigger, {row[0]} present (ms)',
+                         row[4], row[9], row[10]])
+    if 'spawn_cost' in by_key:
+        for row in by_key['spawn_cost'].rows:
+            rows.append([f'World / MuJoCo, {row[0]}, {row[1]} present', row[5], row[6],
+                         row[7]])
     if 'free_running' in by_key:
         for row in by_key['free_running'].rows:
             rows.append([f'free-running ratio to raw mj_step, {row[0]} robot(s)', row[3],
@@ -1221,6 +1261,8 @@ def targets(tables):
         for row in by_key['real_time'].rows:
             rows.append([f'real-time factor error %, {row[0]} robot(s)', abs(row[2]), row[3],
                          row[4]])
+            rows.append([f'real-time world CPU % <= 2 x raw mj_step, {row[0]} robot(s)',
+                         row[6], row[8], row[9]])
     if 'startup' in by_key:
         row = by_key['startup'].rows[0]
         rows.append(['start-up to services ready p50 (s)', row[1], row[5], row[6]])
@@ -1232,8 +1274,8 @@ def targets(tables):
                                         ('holds', '')], rows)
 
 
-SECTIONS = ('round_trips', 'spawn_growth', 'speed', 'startup', 'turning', 'core', 'camera',
-            'sensors', 'answers')
+SECTIONS = ('round_trips', 'spawn_growth', 'speed', 'startup', 'turning', 'core', 'spawn_cost',
+            'camera', 'sensors', 'answers')
 
 
 def run(config, *, sections=SECTIONS, report=print):
@@ -1258,6 +1300,8 @@ def run(config, *, sections=SECTIONS, report=print):
             add(*turning_tables(observer, config))
         if 'core' in sections:
             add(core_table(config))
+        if 'spawn_cost' in sections:
+            add(spawn_cost_table(config))
         if 'camera' in sections:
             add(camera_table(observer, config))
         if 'sensors' in sections:

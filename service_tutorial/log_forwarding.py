@@ -14,7 +14,13 @@ level while forwarding, since Python's default level (WARNING) would drop spawns
 
 import logging
 
+from rclpy.impl.implementation_singleton import rclpy_implementation
+from rclpy.logging import LoggingSeverity
+
 CORE_LOGGER = 'service_tutorial'
+# rclpy's severities are Python's levels; a record goes out at the highest one it reaches.
+_SEVERITIES = (LoggingSeverity.FATAL, LoggingSeverity.ERROR, LoggingSeverity.WARN,
+               LoggingSeverity.INFO, LoggingSeverity.DEBUG)
 
 
 class RclpyHandler(logging.Handler):
@@ -25,19 +31,21 @@ class RclpyHandler(logging.Handler):
         self.ros_logger = ros_logger
 
     def emit(self, record):
-        """Pass a record on; rclpy wants one call site per severity, hence the five calls."""
+        """
+        Pass a record on, with the place in the core that logged it.
+
+        The record knows where it was logged; the rclpy logger's own methods would look for
+        their caller with inspect, reading source files, about 0.4 ms a message, which was a
+        fifth of a spawn through the service.
+        """
         try:
             message = self.format(record)
-            if record.levelno >= logging.CRITICAL:
-                self.ros_logger.fatal(message)
-            elif record.levelno >= logging.ERROR:
-                self.ros_logger.error(message)
-            elif record.levelno >= logging.WARNING:
-                self.ros_logger.warning(message)
-            elif record.levelno >= logging.INFO:
-                self.ros_logger.info(message)
-            else:
-                self.ros_logger.debug(message)
+            severity = next((severity for severity in _SEVERITIES
+                             if record.levelno >= severity), LoggingSeverity.DEBUG)
+            if self.ros_logger.is_enabled_for(severity):
+                rclpy_implementation.rclpy_logging_rcutils_log(
+                    severity, self.ros_logger.name, message, record.funcName,
+                    record.pathname, record.lineno)
         except Exception:  # a failing log call must not fail the step that logged
             self.handleError(record)
 

@@ -14,6 +14,7 @@ that comes later (RViz, robot_state_publisher) still gets it.
 """
 
 from geometry_msgs.msg import TransformStamped
+from rclpy.event_handler import PublisherEventCallbacks
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from service_tutorial.conversions import fill_time_msg, fill_transform_msg
 from service_tutorial.pacing import ODOMETRY_STREAM
@@ -77,8 +78,10 @@ class RobotDescriptionPublisher:
         self.node = node
         if isinstance(urdf, bytes):
             urdf = urdf.decode('utf-8', errors='replace')
+        # One per robot: without rclpy's default event handlers it costs the executor nothing.
         self.robot_description_pub = node.create_publisher(
-            String, topic_prefix(namespace) + 'robot_description', LATCHED_QOS)
+            String, topic_prefix(namespace) + 'robot_description', LATCHED_QOS,
+            event_callbacks=PublisherEventCallbacks(use_default_callbacks=False))
         self.robot_description_pub.publish(String(data=urdf))
 
     def destroy(self):

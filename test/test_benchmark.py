@@ -24,8 +24,11 @@ EXPECTED_ROWS = {
     'real_time': len(QUICK.robot_counts),
     'startup': 1,
     'turning': len(QUICK.durations) * len(QUICK.velocities),
-    'targets': 1 + 2 * len(QUICK.robot_counts) + 1 + 1,
+    'targets': (1 + 2 * len(QUICK.growth_counts) + 6 * len(QUICK.cost_counts) + 1
+                + 3 * len(QUICK.robot_counts) + 1 + 1),
     'core': 2,
+    # cold spawn, warm spawn and delete of two robots per world size, and the box sequence
+    'spawn_cost': 6 * len(QUICK.cost_counts) + 1,
     'camera': 1,
     'sensors': 5,
     'answers': 3,
@@ -35,7 +38,7 @@ EXPECTED_ROWS = {
 def check_cell(table, heading, fmt, value):
     """Numeric columns hold finite numbers, 'within' columns booleans, text columns text."""
     where = f'{table.key}[{heading}]'
-    if heading in ('within', 'holds'):
+    if heading in ('within', 'holds') or heading.endswith(' within'):
         assert isinstance(value, bool), where
     elif fmt:
         assert isinstance(value, (int, float)) and not isinstance(value, bool), where

@@ -120,11 +120,26 @@ def test_a_new_plugin_kind_is_driven_by_the_world_without_touching_it(tick_kind)
     # The world stops its steps at each event: the ticks fall on the period exactly.
     assert tick.ticks == [0.05, 0.1, 0.15, 0.2]
     world.spawn_urdf_file('tinybot', TINYBOT)
-    assert len(tick.binds) == 2
+    # A model spawned later comes after the ticker's elements, which keep their ids.
+    assert len(tick.binds) == 1
+    assert world.model.site('ticker::tick_site').id == tick.binds[-1]
     world.reset_world()
     assert tick.resets == 2
     world.step(25)
     assert tick.ticks[-1] == 0.25
+
+
+def test_a_plugin_is_bound_again_when_its_elements_move(tick_kind):
+    world = World()
+    world.spawn_urdf_file('tinybot', TINYBOT)
+    world.spawn_urdf('ticker', ticking_robot(0.05), position=(1.0, 0.0, 0.05))
+    (tick,) = world.models['ticker'].plugins
+    world.step(30)
+    world.delete_model('tinybot')
+    assert len(tick.binds) == 2
+    assert world.model.site('ticker::tick_site').id == tick.binds[-1]
+    world.step(30)
+    assert tick.ticks == [0.05, 0.1]
 
 
 def test_a_second_plugin_of_a_single_kind_is_refused(tick_kind):

@@ -21,7 +21,8 @@ class Model:
     A spawned robot: its name, its URDF description, where it was spawned, and its plugins.
 
     Its bodies, joints and actuators carry the prefix '<name>::' in the world's MuJoCo model;
-    the world calls bind() after every recompile, which finds them again by name.
+    the world calls bind() whenever their ids in the compiled model may have changed, which
+    finds them again by name.
     """
 
     def __init__(self, name, description, position, orientation):
@@ -79,9 +80,29 @@ class Model:
         else:
             position, orientation = np.array(self.frame.pos), np.array(self.frame.quat)
         self.frame = spec.worldbody.add_frame(pos=position, quat=orientation)
-        # Attaching renames the robot's own spec too; a copy keeps the description as loaded.
-        self.frame.attach_body(self.description.spec.copy().worldbody.first_body(),
+        # The world's spec copies what it attaches (copy_during_attach), so the description,
+        # shared by every model spawned from the same URDF, stays as it was loaded.
+        self.frame.attach_body(self.description.spec.worldbody.first_body(),
                                self.name + SCOPE_SEPARATOR, '')
+
+    def detach(self, spec):
+        """
+        Delete everything attach() brought to the spec.
+
+        Deleting the frame deletes the bodies attached to it and the actuators, sensors and
+        excludes that name them; the assets and the default class the attach brought along go
+        by name. Each delete costs MuJoCo a pass over the whole spec, hence one for the tree.
+        """
+        spec.delete(self.frame)
+        robot = self.description.spec
+        for assets, find in ((robot.meshes, spec.mesh), (robot.materials, spec.material),
+                             (robot.textures, spec.texture)):
+            for asset in assets:
+                spec.delete(find(self.scoped(asset.name)))
+        default = spec.find_default(self.scoped(robot.default.name))
+        if default is not None:
+            spec.delete(default)
+        self.frame = None
 
     def bind(self, world):
         """Find the model's elements in the world's compiled model, then its plugins'."""
@@ -128,6 +149,11 @@ class Model:
         """Return a copy of the model's share of the integration state, by MjData field."""
         return {field: getattr(data, field)[self._state_index(field)].copy()
                 for field in fields}
+
+    def state_without(self, data):
+        """Return a copy of the integration state by MjData field, without the model's share."""
+        return {field: np.delete(getattr(data, field), self._state_index(field))
+                for field in STATE_FIELDS}
 
     def restore_state(self, data, saved):
         """Write a share of the integration state saved by saved_state() back."""

@@ -17,12 +17,13 @@ from service_tutorial.sim import frames
 from service_tutorial.sim import plugins
 from service_tutorial.sim import scene
 from service_tutorial.sim import validation
+from service_tutorial.sim.description_cache import DescriptionCache
 from service_tutorial.sim.frames import ModelState
 from service_tutorial.sim.model import Model
+from service_tutorial.sim.model import STATE_FIELDS
 from service_tutorial.sim.recovery import Recovery
 from service_tutorial.sim.recovery import take_steps
 from service_tutorial.sim.scenery import Scenery
-from service_tutorial.sim.urdf.builder import load_urdf
 from service_tutorial.sim.urdf.hardened_xml import MAX_MODEL_XML_BYTES
 from service_tutorial.sim.urdf.hardened_xml import UrdfError
 from service_tutorial.sim.validation import quoted
@@ -61,6 +62,25 @@ def _restore_state(models, data, saved):
         models[name].restore_state(data, values)
 
 
+def _recompile(spec, mj_model, data, leaving=None):
+    """
+    Recompile an edited spec; return the new model and data, every model's state carried over.
+
+    A model was attached at the end of the spec, or the model leaving was detached. Either way
+    every other model's entries in MuJoCo's state arrays stay in order, so the state before,
+    without the leaving model's share, is the start of each array after. MuJoCo 4 carries all
+    of it over itself; older versions carry positions, velocities and controls only.
+    """
+    if leaving is None:
+        kept = {field: getattr(data, field).copy() for field in STATE_FIELDS}
+    else:
+        kept = leaving.state_without(data)
+    mj_model, data = spec.recompile(mj_model, data)
+    for field, values in kept.items():
+        getattr(data, field)[:len(values)] = values
+    return mj_model, data
+
+
 class World:
     """
     A MuJoCo world with a ground plane into which URDF robots are spawned and deleted.
@@ -88,6 +108,7 @@ class World:
         self._package_resolver = package_resolver
         self._paused = False
         self._models = {}
+        self._descriptions = DescriptionCache(package_resolver, timestep)
         self._next_event = math.inf
         self._kinematics_fresh = False
         # What every spec the world builds starts from: physics options, ground, scenery.
@@ -182,17 +203,13 @@ class World:
         world_position, world_orientation = frames.compose(
             frame.position, frame.orientation, position, orientation)
         try:
-            description = load_urdf(urdf_xml, base_dir=base_dir,
-                                    package_resolver=self._package_resolver,
-                                    timestep=self._timestep)
+            description = self._descriptions.load(urdf_xml, base_dir)
         except UrdfError as error:
             raise WorldError(str(error)) from None
         model = Model(name, description, world_position, world_orientation)
-        # MuJoCo carries positions, velocities and controls over a recompile, not the rest.
-        saved = _saved_state(self._models, self._data)
         try:
             model.attach(self._spec)
-            mj_model, data = self._spec.recompile(self._model, self._data)
+            mj_model, data = _recompile(self._spec, self._model, self._data)
         except Exception as error:
             # The live spec still holds the half-attached robot: build it afresh without it.
             self.rebuild(self._models)
@@ -201,8 +218,7 @@ class World:
         self._model, self._data = mj_model, data
         self._models[name] = model
         model.mark_placed()
-        self._after_recompile()
-        _restore_state(self._models, self._data, saved)
+        self._after_recompile([model])  # the others' elements kept their ids
         failure = self.forward()
         if failure is not None:
             self.rebuild({other: kept for other, kept in self._models.items() if other != name})
@@ -229,19 +245,22 @@ class World:
 
     def delete_model(self, name):
         """Remove a model; every other model keeps its state."""
-        self._spawned(name)
-        self.rebuild({other: model for other, model in self._models.items() if other != name})
+        model = self._spawned(name)
+        names = list(self._models)
+        model.detach(self._spec)
+        del self._models[name]
+        try:
+            self._model, self._data = _recompile(self._spec, self._model, self._data, model)
+        except Exception:
+            self.rebuild(self._models)
+            return
+        # The models spawned after it moved up in MuJoCo's arrays; the others stayed.
+        self._after_recompile([self._models[later] for later in names[names.index(name) + 1:]])
+        self.forward()
         _logger.info("deleted model '%s'", name)
 
     def rebuild(self, models):
-        """
-        Build the spec, model and data afresh, holding just the given models (name -> Model).
-
-        A spec keeps a copy of every robot ever attached to it, deleted or not, so deleting
-        from the live spec would make a long-running world grow without bound. A fresh spec
-        holds only the live robots; their integration state is carried over, so the
-        simulation goes on exactly as if the spec had been edited in place.
-        """
+        """Build spec, model and data afresh with just the given models, their state kept."""
         spec = scene.make_scene(*self._scene)
         for model in models.values():
             model.attach(spec)
@@ -250,14 +269,15 @@ class World:
         data.time = self._data.time
         saved = _saved_state(models, self._data)
         self._spec, self._model, self._data, self._models = spec, mj_model, data, models
-        self._after_recompile()
+        self._after_recompile(models.values())
         _restore_state(self._models, self._data, saved)
         self.forward()
 
-    def _after_recompile(self):
+    def _after_recompile(self, moved):
+        # A new model and data; moved: the models whose elements may have new ids.
         self._kinematics_fresh = False
         self._recovery.resize()
-        for model in self._models.values():
+        for model in moved:
             model.bind(self)
         self.schedule_events()
 

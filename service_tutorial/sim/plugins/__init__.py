@@ -70,8 +70,10 @@ class Plugin:
     """
     A plugin of one spawned model, driven by the world's step.
 
-    The world calls bind() after every recompile, update() once simulation time reaches
-    next_event(), and reset() when the model is put back at rest (spawn, resets, recovery).
+    The world calls bind() when the model's elements get their ids in a compiled model (its
+    spawn, the delete of a model spawned before it, a rebuild), update() once simulation time
+    reaches next_event(), and reset() when the model is put back at rest (spawn, resets,
+    recovery). A plugin reads the world's model and data afresh: both change at every spawn.
     """
 
     # Whether a robot may carry more than one plugin of this kind, and its name in refusals.

@@ -1,0 +1,60 @@
+"""
+The robots a world has built from URDF, kept so that the same text spawns again unbuilt.
+
+Building a robot (parsing, checks, yourdfpy, the spec builder) took most of a spawn; a fleet
+spawns one description many times. A description is kept under a digest of its text and the
+folder its meshes resolve from, and used again only while its mesh files are unchanged. A
+description with missing meshes is not kept: the files may turn up. Spawning never changes a
+description: the world's spec attaches a copy of it.
+"""
+
+import collections
+import hashlib
+import os
+
+from service_tutorial.sim.urdf.builder import load_urdf
+
+# Descriptions kept per world, the least recently spawned dropped first.
+CACHED_DESCRIPTIONS = 16
+
+
+def _mesh_stamps(paths):
+    """Return (path, modification time, size) of each mesh file, None for one that is gone."""
+    stamps = []
+    for path in dict.fromkeys(paths):
+        try:
+            status = os.stat(path)
+        except OSError:
+            return None
+        stamps.append((path, status.st_mtime_ns, status.st_size))
+    return tuple(stamps)
+
+
+class DescriptionCache:
+    """Builds robot descriptions for one world, keeping the ones it may be asked for again."""
+
+    def __init__(self, package_resolver, timestep, size=CACHED_DESCRIPTIONS):
+        """Build as the world does: with its package resolver and for its timestep."""
+        self._package_resolver = package_resolver
+        self._timestep = timestep
+        self._size = size
+        self._kept = collections.OrderedDict()  # key -> (description, mesh stamps)
+
+    def load(self, urdf_xml, base_dir=None):
+        """Return the RobotDescription of URDF text, or raise UrdfError as load_urdf() does."""
+        text = urdf_xml.encode() if isinstance(urdf_xml, str) else bytes(urdf_xml)
+        key = (hashlib.sha256(text).digest(), isinstance(urdf_xml, str),
+               os.path.realpath(base_dir) if base_dir else None)
+        kept = self._kept.pop(key, None)
+        if kept is not None and _mesh_stamps(kept[0].mesh_files) == kept[1]:
+            self._kept[key] = kept
+            return kept[0]
+        description = load_urdf(urdf_xml, base_dir=base_dir,
+                                package_resolver=self._package_resolver,
+                                timestep=self._timestep)
+        stamps = _mesh_stamps(description.mesh_files)
+        if not description.missing_meshes and stamps is not None:
+            self._kept[key] = (description, stamps)
+            while len(self._kept) > self._size:
+                self._kept.popitem(last=False)
+        return description
