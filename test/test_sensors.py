@@ -113,6 +113,34 @@ def test_laser_noise_has_the_blocks_spread_and_stays_in_range():
     assert np.isposinf(laser.ranges[:30]).all()
 
 
+def test_laser_noise_is_the_same_in_every_run_of_the_same_world():
+    def noisy_scans():
+        world, laser = laser_world(1.0, **{'<stddev>0.0</stddev>': '<stddev>0.02</stddev>'})
+        scans = []
+        laser.listener = lambda sensor: scans.append(sensor.ranges.copy())
+        laser.set_active(True)
+        world.step(200)
+        return np.array(scans)
+
+    first, second = noisy_scans(), noisy_scans()
+    assert len(first) >= 3
+    np.testing.assert_array_equal(first, second)
+    assert not np.array_equal(first[0], first[1]), 'each scan draws fresh noise'
+
+
+def test_laser_resolution_casts_samples_times_resolution_beams_over_the_same_fan():
+    world, laser = laser_world(1.0, **{'<resolution>1</resolution>': '<resolution>2</resolution>'})
+    config = laser.config
+    assert config.samples == 362
+    assert (config.angle_min, config.angle_max) == pytest.approx((-math.pi / 2, math.pi / 2))
+    listen(laser)
+    world.step(1)
+    assert laser.ranges.shape == (362,)
+    # The middle two beams straddle straight ahead, a quarter of a degree either side.
+    assert laser.ranges[180] == pytest.approx(1.0, abs=0.005)
+    assert laser.ranges[181] == pytest.approx(1.0, abs=0.005)
+
+
 def test_laser_scans_at_its_rate_in_simulation_time_only_while_active():
     world, laser = laser_world(1.0)
     world.step(100)
