@@ -9,6 +9,7 @@ Readings see the world as MuJoCo's own sensors do: as it was at the start of the
 """
 
 from dataclasses import dataclass
+import functools
 import math
 import zlib
 
@@ -74,14 +75,19 @@ class Sensor(Plugin):
     kind = 'sensor'  # names the sensor's site: '<kind>:<name>'
 
     def __init__(self, config, block):
-        """Start inactive, with no reading and noise drawn from a generator seeded by name."""
+        """Start inactive, with no reading."""
         super().__init__(config, block)
         self.active = False
         self.listener = None  # called with the sensor after each reading
         self.reading_time = None  # simulation time of the latest reading
-        self.random = np.random.default_rng(zlib.crc32(config.name.encode()))
         self._next_reading = math.inf
         self.site_id = -1
+
+    @functools.cached_property
+    def random(self):
+        """Return the noise generator, seeded by the sensor's name: the same noise each run."""
+        # Made when first drawn from: making one costs more than a warm spawn's bookkeeping.
+        return np.random.default_rng(zlib.crc32(self.config.name.encode()))
 
     @property
     def period(self):
