@@ -103,6 +103,57 @@ def test_links_of_one_robot_collide_only_if_both_say_self_collide(left, right, c
     assert (frozenset({'flaps::left', 'flaps::right'}) in pairs) is collide
 
 
+def knot(anchored, self_collide='false'):
+    """
+    Return a robot of six links whose boxes all overlap.
+
+    The plate is fixed to the base, the arm hinged to it, the hand fixed to the arm, the
+    finger hinged to the hand, and the thumb hinged to the base.
+    """
+    joints = (('plate', 'base', 'fixed'), ('arm', 'base', 'continuous'),
+              ('hand', 'arm', 'fixed'), ('finger', 'hand', 'continuous'),
+              ('thumb', 'base', 'continuous'))
+    links = ''.join(f'<link name="{name}">{INERTIAL.format(mass=0.5)}<collision><geometry>'
+                    '<box size="0.2 0.2 0.2"/></geometry></collision></link>'
+                    f'<gazebo reference="{name}"><selfCollide>{self_collide}</selfCollide>'
+                    '</gazebo>' for name in ('base', *(child for child, _, _ in joints)))
+    links += ''.join(f'<joint name="{child}_joint" type="{kind}"><parent link="{parent}"/>'
+                     f'<child link="{child}"/><axis xyz="0 0 1"/></joint>'
+                     for child, parent, kind in joints)
+    if anchored:
+        links += ('<link name="world"/><joint name="anchor" type="fixed"><parent link="world"/>'
+                  '<child link="base"/><origin xyz="0 0 0.5"/></joint>')
+    return f'<robot name="knot">{links}</robot>'
+
+
+def touching_links(world, name):
+    """Return the pairs of a robot's own links in contact, by link name."""
+    mj_model, data = world.model, world.data
+    prefix = name + '::'
+    pairs = (tuple(mj_model.body(mj_model.geom_bodyid[geom]).name
+                   for geom in (contact.geom1, contact.geom2))
+             for contact in data.contact[:data.ncon])
+    return {frozenset(body[len(prefix):] for body in pair) for pair in pairs
+            if all(body.startswith(prefix) for body in pair)}
+
+
+@pytest.mark.parametrize('anchored, excludes', [(False, 5), (True, 11)])
+def test_overlapping_links_of_one_robot_never_touch_however_they_are_joined(anchored,
+                                                                            excludes):
+    world = World()
+    world.spawn_urdf('knot', knot(anchored), position=(0.0, 0.0, 0.3))
+    world.step(1)
+    assert touching_links(world, 'knot') == set()
+    # MuJoCo keeps apart links fixed to each other and a joint's two sides itself (not when
+    # one side is fixed to the world): only the other pairs of the 15 need an exclude.
+    assert world.model.nexclude == excludes
+    # The same links, told to collide, touch wherever MuJoCo does not keep them apart.
+    world.spawn_urdf('loose', knot(anchored, 'true'), position=(2.0, 0.0, 0.3))
+    world.step(1)
+    touching = touching_links(world, 'loose')
+    assert {frozenset({'arm', 'thumb'}), frozenset({'finger', 'base'})} <= touching
+
+
 def test_a_link_without_gravity_floats_and_one_with_it_falls():
     for gravity, angle in (('false', 0.0), ('true', -math.pi / 2.0)):
         world = World()

@@ -187,6 +187,10 @@ class _SpecBuilder:
         self.meshes = MeshLoader(self._spec, base_dir, package_resolver)
         self.notes = []  # what the user should know about how the links were built
         self._collides = []  # (link name, selfCollide) of every link with a collision geom
+        # Per link, the link at the root of its rigid group (None: fixed to the world), and
+        # per group root, the group its parent link belongs to: MuJoCo's welds.
+        self._weld = {}
+        self._weld_parent = {}
 
     def build(self):
         """Return the finished spec and what a world needs to know about it."""
@@ -234,6 +238,9 @@ class _SpecBuilder:
                 self._add_joint(root_body, world_joint)
         else:
             root_body.add_freejoint()
+        moves = not anchored or world_joints[0].type != 'fixed'
+        self._weld[root] = root if moves else None
+        self._weld_parent[root] = None
         self._fill_link(root_body, root)
 
         visited = {root}
@@ -249,6 +256,10 @@ class _SpecBuilder:
             if joint.type != 'fixed':
                 self._add_joint(body, joint)
                 joint_names.append(joint.name)
+                self._weld[joint.child] = joint.child
+                self._weld_parent[joint.child] = self._weld[joint.parent]
+            else:
+                self._weld[joint.child] = self._weld[joint.parent]
             self._fill_link(body, joint.child)
             stack.extend((body, child) for child in reversed(children.get(joint.child, [])))
         unreached = [name for name in self._links if name not in visited and name != WORLD_LINK]
@@ -367,12 +378,25 @@ class _SpecBuilder:
         """
         Keep the robot's links from colliding with each other, as Gazebo does.
 
-        Two links of one model collide only if both set <selfCollide> true.
+        Two links of one model collide only if both set <selfCollide> true. MuJoCo itself
+        never lets links of one rigid group collide, nor two groups where one hangs from the
+        other (unless that is the world): those pairs need no exclude, and every exclude costs
+        each spawn and delete of the robot.
         """
         for index, (first, first_collides) in enumerate(self._collides):
             for second, second_collides in self._collides[index + 1:]:
-                if not (first_collides and second_collides):
+                if not (first_collides and second_collides or self._kept_apart_by_mujoco(
+                        first, second)):
                     self._spec.add_exclude(bodyname1=first, bodyname2=second)
+
+    def _kept_apart_by_mujoco(self, first, second):
+        """Tell whether MuJoCo filters the contacts of two links (see mj_collision)."""
+        first, second = self._weld[first], self._weld[second]
+        if first == second:
+            return True
+        if first is None or second is None:
+            return False
+        return first == self._weld_parent[second] or second == self._weld_parent[first]
 
     def _set_inertia(self, body, link):
         inertial = link.inertial
