@@ -108,11 +108,12 @@ class Model:
         """Find the model's elements in the world's compiled model, then its plugins'."""
         mj_model = world.model
         description = self.description
-        body_ids = [mj_model.body(self.scoped(link)).id for link in description.links]
+        bodies = {mj_model.body(self.scoped(link)).id for link in description.links}
         self.root_id = mj_model.body(self.scoped(description.root_link)).id
         self.free_qpos_adr = self.free_dof_adr = None
         qpos, dofs = [], []
-        for joint_id in np.nonzero(np.isin(mj_model.jnt_bodyid, body_ids))[0]:
+        for joint_id in (joint for joint, body in enumerate(mj_model.jnt_bodyid.tolist())
+                         if body in bodies):
             kind = int(mj_model.jnt_type[joint_id])
             qpos_adr = int(mj_model.jnt_qposadr[joint_id])
             dof_adr = int(mj_model.jnt_dofadr[joint_id])
