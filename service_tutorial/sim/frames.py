@@ -112,9 +112,11 @@ def in_world(frame, state):
 
 def body_state(mj_model, data, body_id):
     """Return the world-frame state of a body; the caller keeps the kinematics current."""
+    if body_id == 0:  # the world itself, which needs no kinematics
+        return ModelState(position=np.zeros(3), orientation=np.array(IDENTITY_QUATERNION),
+                          linear_velocity=np.zeros(3), angular_velocity=np.zeros(3))
     twist = np.zeros(6)
-    if body_id > 0:
-        mujoco.mj_objectVelocity(mj_model, data, mujoco.mjtObj.mjOBJ_BODY, body_id, twist, 0)
+    mujoco.mj_objectVelocity(mj_model, data, mujoco.mjtObj.mjOBJ_BODY, body_id, twist, 0)
     return ModelState(position=data.xpos[body_id].copy(),
                       orientation=data.xquat[body_id].copy(),
                       linear_velocity=twist[3:], angular_velocity=twist[:3])

@@ -54,6 +54,15 @@ class Model:
         """Return the name a URDF element of this model has in the world's MuJoCo model."""
         return self.name + SCOPE_SEPARATOR + element_name
 
+    def element_id(self, mj_model, kind, element_name):
+        """Return the id of one of the model's elements (an mjtObj kind) in a compiled model."""
+        # mj_name2id, not mj_model.body(name): an accessor costs several times as much on a
+        # model just compiled, which a spawn's binding pays for every element it looks up.
+        element = mujoco.mj_name2id(mj_model, kind, self.scoped(element_name))
+        if element < 0:
+            raise KeyError(f'{self.scoped(element_name)!r} is not in the compiled model')
+        return element
+
     @property
     def anchored(self):
         """Return True if the model is fixed to the world rather than free to move."""
@@ -108,8 +117,9 @@ class Model:
         """Find the model's elements in the world's compiled model, then its plugins'."""
         mj_model = world.model
         description = self.description
-        bodies = {mj_model.body(self.scoped(link)).id for link in description.links}
-        self.root_id = mj_model.body(self.scoped(description.root_link)).id
+        body = mujoco.mjtObj.mjOBJ_BODY
+        bodies = {self.element_id(mj_model, body, link) for link in description.links}
+        self.root_id = self.element_id(mj_model, body, description.root_link)
         self.free_qpos_adr = self.free_dof_adr = None
         qpos, dofs = [], []
         for joint_id in (joint for joint, body in enumerate(mj_model.jnt_bodyid.tolist())
@@ -124,15 +134,17 @@ class Model:
                 self.free_qpos_adr, self.free_dof_adr = qpos_adr, dof_adr
         self.qpos_index = np.array(qpos, dtype=int)
         self.dof_index = np.array(dofs, dtype=int)
-        named = [mj_model.joint(self.scoped(name)) for name in description.joints]
-        self.joint_qpos_adr = np.array([joint.qposadr[0] for joint in named], dtype=int)
-        self.joint_dof_adr = np.array([joint.dofadr[0] for joint in named], dtype=int)
-        actuators = [mj_model.actuator(self.scoped(name)) for name in description.actuators]
-        self.actuator_index = np.array([actuator.id for actuator in actuators], dtype=int)
+        joints = np.array([self.element_id(mj_model, mujoco.mjtObj.mjOBJ_JOINT, name)
+                           for name in description.joints], dtype=int)
+        self.joint_qpos_adr = mj_model.jnt_qposadr[joints].astype(int)
+        self.joint_dof_adr = mj_model.jnt_dofadr[joints].astype(int)
+        self.actuator_index = np.array(
+            [self.element_id(mj_model, mujoco.mjtObj.mjOBJ_ACTUATOR, name)
+             for name in description.actuators], dtype=int)
         self.act_index = np.array(
-            [address for actuator in actuators if actuator.actadr[0] >= 0
-             for address in range(actuator.actadr[0], actuator.actadr[0] + actuator.actnum[0])],
-            dtype=int)
+            [address for start, count in zip(mj_model.actuator_actadr[self.actuator_index],
+                                             mj_model.actuator_actnum[self.actuator_index])
+             if start >= 0 for address in range(start, start + count)], dtype=int)
         for plugin in self.plugins:
             plugin.bind(world, self)
 

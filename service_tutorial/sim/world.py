@@ -218,7 +218,7 @@ class World:
         self._model, self._data = mj_model, data
         self._models[name] = model
         model.mark_placed()
-        self._after_recompile([model])  # the others' elements kept their ids
+        self._after_recompile([model])  # the others' elements kept their ids; events follow
         failure = self.forward()
         if failure is not None:
             self.rebuild({other: kept for other, kept in self._models.items() if other != name})
@@ -256,6 +256,7 @@ class World:
             return
         # The models spawned after it moved up in MuJoCo's arrays; the others stayed.
         self._after_recompile([self._models[later] for later in names[names.index(name) + 1:]])
+        self.schedule_events()
         self.forward()
         _logger.info("deleted model '%s'", name)
 
@@ -270,6 +271,7 @@ class World:
         saved = _saved_state(models, self._data)
         self._spec, self._model, self._data, self._models = spec, mj_model, data, models
         self._after_recompile(models.values())
+        self.schedule_events()
         _restore_state(self._models, self._data, saved)
         self.forward()
 
@@ -279,7 +281,6 @@ class World:
         self._recovery.resize()
         for model in moved:
             model.bind(self)
-        self.schedule_events()
 
     def forward(self):
         """
@@ -294,6 +295,7 @@ class World:
             reason = str(error).splitlines()[0]
             _logger.warning('MuJoCo: %s', reason)
             return reason
+        self._kinematics_fresh = True  # mj_forward computed body_state()'s quantities too
         return None
 
     def state_changed(self):
@@ -371,7 +373,7 @@ class World:
 
     def body_state(self, body_id):
         """Return a body's pose and twist in the world frame, as a ModelState."""
-        if not self._kinematics_fresh:
+        if not self._kinematics_fresh and body_id != 0:
             mujoco.mj_kinematics(self._model, self._data)
             mujoco.mj_comPos(self._model, self._data)
             mujoco.mj_comVel(self._model, self._data)

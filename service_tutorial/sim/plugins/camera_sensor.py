@@ -112,7 +112,8 @@ class CameraSensor(Sensor):
     def bind(self, world, model):
         """Find the camera in the compiled model."""
         super().bind(world, model)
-        self._camera_id = world.model.camera(model.scoped(self.config.site_name(self.kind))).id
+        self._camera_id = model.element_id(world.model, mujoco.mjtObj.mjOBJ_CAMERA,
+                                           self.config.site_name(self.kind))
 
     def read(self):
         """Render the world from the camera, in the block's encoding."""

@@ -190,17 +190,17 @@ class DiffDrive(Plugin):
         super().bind(world, model)
         mj_model, config = world.model, self.config
         self._actuator_ids = np.array(
-            [mj_model.actuator(model.scoped(drive_actuator_name(joint))).id
-             for joint in self._joints], dtype=int)
+            [model.element_id(mj_model, mujoco.mjtObj.mjOBJ_ACTUATOR,
+                              drive_actuator_name(joint)) for joint in self._joints], dtype=int)
         self._act_adr = mj_model.actuator_actadr[self._actuator_ids].astype(int)
         base_link = config.robot_base_frame
         if base_link not in model.description.links:
             base_link = model.description.root_link
-        self._base_body_id = mj_model.body(model.scoped(base_link)).id
-        left, right = (mj_model.joint(model.scoped(name))
-                       for name in (config.left_joint, config.right_joint))
-        self._wheel_qpos_adr = (int(left.qposadr[0]), int(right.qposadr[0]))
-        self._wheel_dof_adr = (int(left.dofadr[0]), int(right.dofadr[0]))
+        self._base_body_id = model.element_id(mj_model, mujoco.mjtObj.mjOBJ_BODY, base_link)
+        wheels = [model.element_id(mj_model, mujoco.mjtObj.mjOBJ_JOINT, name)
+                  for name in (config.left_joint, config.right_joint)]
+        self._wheel_qpos_adr = tuple(int(mj_model.jnt_qposadr[wheel]) for wheel in wheels)
+        self._wheel_dof_adr = tuple(int(mj_model.jnt_dofadr[wheel]) for wheel in wheels)
 
     def next_event(self):
         """Return when the next ramp ends or the command lapses."""

@@ -148,9 +148,10 @@ class ImuSensor(Sensor):
     def bind(self, world, model):
         """Find where MuJoCo writes the three measurements."""
         super().bind(world, model)
-        sensors = [world.model.sensor(model.scoped(self.config.sensor_name(channel)))
-                   for channel in IMU_CHANNELS]
-        self._addresses = tuple(int(sensor.adr[0]) for sensor in sensors)
+        self._addresses = tuple(
+            int(world.model.sensor_adr[model.element_id(
+                world.model, mujoco.mjtObj.mjOBJ_SENSOR, self.config.sensor_name(channel))])
+            for channel in IMU_CHANNELS)
 
     def read(self):
         """Copy MuJoCo's measurements of the last step and add the noise."""

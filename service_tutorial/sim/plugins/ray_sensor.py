@@ -9,6 +9,7 @@ in-range readings only, which then stay within [range_min, range_max].
 """
 
 from dataclasses import dataclass
+import functools
 import logging
 import math
 
@@ -51,8 +52,10 @@ class RayConfig(SensorConfig):
         return (self.angle_max - self.angle_min) / (self.samples - 1) if self.samples > 1 \
             else 0.0
 
+    @functools.cached_property
     def directions(self):
         """Return the unit vectors of the beams in the sensor frame, one row each."""
+        # Worked out once per robot description, not at every spawn of it.
         angles = self.angle_min + self.angle_increment * np.arange(self.samples)
         return np.stack([np.cos(angles), np.sin(angles), np.zeros(self.samples)], axis=1)
 
@@ -93,7 +96,7 @@ class RaySensor(Sensor):
     def __init__(self, config, block):
         """Precompute the beams in the sensor frame and the buffers of a cast."""
         super().__init__(config, block)
-        self._directions = config.directions()
+        self._directions = config.directions
         # Buffers of a cast, made once: the beams in the world frame, what each ray hit.
         self._world_directions = np.zeros((config.samples, 3))
         self._geom_ids = np.zeros(config.samples, dtype=np.int32)

@@ -13,6 +13,7 @@ import functools
 import math
 import zlib
 
+import mujoco
 import numpy as np
 from service_tutorial.sim.plugins import Plugin
 from service_tutorial.sim.urdf.hardened_xml import UrdfError
@@ -98,7 +99,8 @@ class Sensor(Plugin):
     def bind(self, world, model):
         """Find the sensor's site in the compiled model."""
         super().bind(world, model)
-        self.site_id = world.model.site(model.scoped(self.config.site_name(self.kind))).id
+        self.site_id = model.element_id(world.model, mujoco.mjtObj.mjOBJ_SITE,
+                                        self.config.site_name(self.kind))
 
     def set_active(self, active):
         """Start measuring (from the next step on) or stop, as the sensor is listened to."""
