@@ -279,7 +279,7 @@ class MujocoWorld(Node):
                                         request.reference_frame)
             answer = f'SpawnModel: Successfully spawned entity {request.model_name!r}'
             return f'{answer} ({left_out})' if left_out else answer
-        return self._answer('SpawnModel', spawn, response)
+        return self._answer('SpawnModel', self._holding_time(spawn), response)
 
     def delete_model_callback(self, request, response):
         """Delete a model and its topics."""
@@ -289,7 +289,7 @@ class MujocoWorld(Node):
             if self.viewer is not None:
                 self._open_viewer()
             return f'DeleteModel: Successfully deleted model {request.model_name!r}'
-        return self._answer('DeleteModel', delete, response)
+        return self._answer('DeleteModel', self._holding_time(delete), response)
 
     def get_model_list_callback(self, request, response):
         """List every model in spawn order."""
@@ -320,6 +320,16 @@ class MujocoWorld(Node):
                 reference_frame=request.reference_frame)
             return f'SetModelState: set state of {request.model_name!r}'
         return self._answer('SetModelState', set_state, response)
+
+    def _holding_time(self, operation):
+        """Return operation, made to hold simulation time for as long as it runs."""
+        def held():
+            start = time.monotonic()
+            try:
+                return operation()
+            finally:
+                self.pacer.hold(time.monotonic() - start)
+        return held
 
     def _answer(self, service, operation, response):
         """Run a world operation and report its outcome in success and status_message."""

@@ -18,6 +18,9 @@ time, ticks come every REAL_TIME_SHARE turns (REAL_TIME_PERIOD to MAX_REAL_TIME_
 there is nothing to step and ticks come every PAUSED_TICK_PERIOD, and /clock is said again
 every PAUSED_CLOCK_PERIOD of wall time (repeat_due), so that a late joiner learns the time.
 
+While a spawn or a delete keeps the world busy, simulation time stands still (hold), as in
+Gazebo; the world does not run fast afterwards to make up for it.
+
 The real-time factor and the streams' periods may change at run time (set_real_time_factor,
 set_period): the pace changes from the current simulation time on, and a stream's next turn
 moves by the change of its period.
@@ -75,6 +78,15 @@ class Pacer:
         """Tie simulation time to the wall clock from now on (start, pause, reset)."""
         self._wall_anchor = self._wall_clock()
         self._sim_anchor = sim_time
+
+    def hold(self, wall_seconds):
+        """
+        Let simulation time stand still for wall_seconds the world was busy (a spawn, a delete).
+
+        As in Gazebo, the world does not race to make up the time afterwards: the steps that
+        were due before are still taken, the time the world was busy is not.
+        """
+        self._wall_anchor += max(0.0, wall_seconds)
 
     def set_real_time_factor(self, real_time_factor, sim_time):
         """Run at another pace (0: free-running) from simulation time sim_time on."""

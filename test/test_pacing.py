@@ -93,6 +93,18 @@ def test_real_time_does_not_catch_up_more_than_a_tenth_of_a_second():
     assert world.steps == 50 + 5
 
 
+def test_time_the_world_was_held_is_not_made_up_but_steps_due_before_are_taken():
+    pacer, world, wall, _ = make(1.0)
+    wall.now += 0.004  # two steps fall due
+    pacer.hold(0.010)  # then a spawn keeps the world busy for 10 ms
+    wall.now += 0.010
+    world.tick()
+    assert world.steps == 2
+    wall.now += 0.02
+    world.tick()
+    assert world.steps == 2 + 10
+
+
 def test_stepping_also_stops_where_something_else_falls_due():
     pacer, world, wall, _ = make(1.0)
     world.tick()
