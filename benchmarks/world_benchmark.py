@@ -1087,7 +1087,7 @@ def scan_row(samples, config):
     world.step(1)
     model, data, site = world.model, world.data, laser.site_id
     origin = data.site_xpos[site].copy()
-    directions = (laser.config.directions() @ data.site_xmat[site].reshape(3, 3).T).ravel()
+    directions = (laser.config.directions @ data.site_xmat[site].reshape(3, 3).T).ravel()
     geom_ids, distances = np.zeros(samples, dtype=np.int32), np.zeros(samples)
 
     def bare():

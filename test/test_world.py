@@ -114,7 +114,7 @@ def test_model_listing_and_delete(world):
     world.spawn_urdf_file('tinybot', TINYBOT)
     world.spawn_urdf_file('r2d2', R2D2, position=(2.0, 0.0, 0.0))
     assert world.model_names() == ['tinybot', 'r2d2']
-    assert world.has_model('r2d2') and not world.has_model('c3po')
+    assert 'r2d2' in world.models and 'c3po' not in world.models
     assert world.diff_drive_models() == ['tinybot']
     world.delete_model('r2d2')
     assert world.model_names() == ['tinybot']

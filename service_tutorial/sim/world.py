@@ -165,10 +165,6 @@ class World:
         """Return the models the world removed by itself because they kept blowing up."""
         return self._recovery.take_removed()
 
-    def has_model(self, name):
-        """Return True if a model of that name exists."""
-        return name in self._models
-
     def diff_drive_models(self):
         """Return the names of the models that carry a drive (diff drive or skid steer)."""
         return [name for name, model in self._models.items() if model.drive() is not None]
