@@ -377,24 +377,36 @@ class NodeProcess:
         self.stop()
 
 
-def sim_time_sample(observer, model_name):
+def sim_time_sample(observer, model_name, *, timeout=30.0):
     """Return (simulation time, wall time) from one get_model_state round trip."""
     from service_tutorial.conversions import seconds_of
     from srv_interfaces.srv import GetModelState
     start = time.monotonic()
     response = observer.call(GetModelState, '/mujoco/get_model_state',
-                             GetModelState.Request(model_name=model_name))
+                             GetModelState.Request(model_name=model_name), timeout=timeout)
     end = time.monotonic()
     if not response.success:
         raise BenchmarkError(f'get_model_state {model_name}: {response.status_message}')
     return seconds_of(response.header.stamp), 0.5 * (start + end), response
 
 
-def wait_for_world(observer, process, model_name):
-    """Wait until the world process answers get_model_state for model_name."""
+def wait_for_world(observer, process, model_name, *, tries=6):
+    """
+    Wait until the world process answers get_model_state for model_name.
+
+    A service can be ready before its server has matched the client's response reader; a
+    response sent in that gap is lost (a known DDS race), so a first call that gets no answer
+    within 5 s is made again.
+    """
     from srv_interfaces.srv import GetModelState
     observer.wait_for_service(GetModelState, '/mujoco/get_model_state', process=process)
-    sim_time_sample(observer, model_name)
+    for attempt in range(tries):
+        try:
+            return sim_time_sample(observer, model_name, timeout=5.0)
+        except BenchmarkError:
+            process.check()
+            if attempt == tries - 1:
+                raise
 
 
 def wait_until_gone(observer, srv_type, name, *, timeout=10.0):
