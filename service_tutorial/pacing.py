@@ -14,9 +14,10 @@ simulated rates would cost more than the physics.
 The executor's turn between two ticks costs CPU time that grows with the node's topics (about
 1.8 ms with 50 robots), so ticks are spaced to keep it a small share of the time. Free-running,
 a tick steps EXECUTOR_SHARE times as long as a turn (STEP_BUDGET to MAX_STEP_BUDGET); in real
-time, ticks come every REAL_TIME_SHARE turns (REAL_TIME_PERIOD to MAX_REAL_TIME_PERIOD); paused,
-there is nothing to step and ticks come every PAUSED_TICK_PERIOD, and /clock is said again
-every PAUSED_CLOCK_PERIOD of wall time (repeat_due), so that a late joiner learns the time.
+time, ticks come every REAL_TIME_SHARE turns (REAL_TIME_PERIOD to MAX_REAL_TIME_PERIOD, and
+no more than MAX_TICK_SIMULATED of simulated time apart); paused, there is nothing to step and
+ticks come every PAUSED_TICK_PERIOD, and /clock is said again every PAUSED_CLOCK_PERIOD of wall
+time (repeat_due), so that a late joiner learns the time.
 
 While a spawn or a delete keeps the world busy, simulation time stands still (hold), as in
 Gazebo; the world does not run fast afterwards to make up for it.
@@ -36,9 +37,12 @@ JOINT_STATES_STREAM = 'joint_states'
 STEP_BUDGET = 0.005
 EXECUTOR_SHARE = 20.0
 MAX_STEP_BUDGET = 0.05
-REAL_TIME_SHARE = 5.0
+REAL_TIME_SHARE = 20.0
 REAL_TIME_PERIOD = 0.002
 MAX_REAL_TIME_PERIOD = 0.02
+# At most this much simulated time per tick: a command waits for the next tick, so a tick of
+# more would delay stop commands by more than this of simulated time at high factors.
+MAX_TICK_SIMULATED = 0.02
 PAUSED_TICK_PERIOD = 0.02
 PAUSED_CLOCK_PERIOD = 0.1
 # Further behind real time than this (s), the machine cannot keep up: do not try to catch up.
@@ -122,8 +126,8 @@ class Pacer:
             return round(PAUSED_TICK_PERIOD * NANOSECONDS)
         if self.free_running:
             return 0
-        period = min(MAX_REAL_TIME_PERIOD,
-                     max(REAL_TIME_PERIOD, REAL_TIME_SHARE * self.executor_turn))
+        longest = min(MAX_REAL_TIME_PERIOD, MAX_TICK_SIMULATED / self.real_time_factor)
+        period = min(longest, max(REAL_TIME_PERIOD, REAL_TIME_SHARE * self.executor_turn))
         return round(period * 1e3) * 1_000_000
 
     def chunks(self, sim_time, other_due=lambda: math.inf):

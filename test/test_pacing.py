@@ -157,14 +157,17 @@ def test_tick_periods_follow_the_executor_turn():
         cpu.now += seconds
         pacer.start_tick()
     for _ in range(200):
-        turn(0.003)  # 3 ms between ticks: ticks every 5 turns, 15 ms
-    assert pacer.executor_turn == pytest.approx(0.003)
-    assert pacer.tick_period_ns(paused=False) == 15_000_000
+        turn(0.0005)  # 0.5 ms between ticks: ticks every 20 turns, 10 ms
+    assert pacer.executor_turn == pytest.approx(0.0005)
+    assert pacer.tick_period_ns(paused=False) == 10_000_000
     turn(0.5)  # a slow service call is not overhead: the estimate barely moves
-    assert pacer.executor_turn < 0.0032
+    assert pacer.executor_turn < 0.00055
     for _ in range(200):
-        turn(0.010)
+        turn(0.003)  # 20 turns would be 60 ms
     assert pacer.tick_period_ns(paused=False) == 20_000_000, 'at most 20 ms'
+    # Five times real time, a tick steps no more than 20 ms of simulated time either.
+    pacer.set_real_time_factor(5.0, world.time)
+    assert pacer.tick_period_ns(paused=False) == 4_000_000
 
     free, *_ = make(0.0)
     assert free.first_tick_period == 0.0 and free.tick_period_ns(paused=False) == 0
