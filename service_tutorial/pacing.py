@@ -47,6 +47,8 @@ PAUSED_TICK_PERIOD = 0.02
 PAUSED_CLOCK_PERIOD = 0.1
 # Further behind real time than this (s), the machine cannot keep up: do not try to catch up.
 MAX_LAG = 0.1
+# Spawns and deletes may put the next tick off (see hold), but not for longer than this (s).
+MAX_DEFERRAL = 0.1
 NANOSECONDS = 1_000_000_000
 
 
