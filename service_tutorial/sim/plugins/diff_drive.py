@@ -162,9 +162,9 @@ class DiffDrive(Plugin):
         pairs = config.wheel_pairs()
         # Per wheel, lefts first: which side (-1 left, +1 right), half the pair's
         # separation, and the wheel's radius.
-        self._sides = np.repeat([-1.0, 1.0], len(pairs))
-        self._half_separations = np.tile([separation / 2.0 for _, _, separation, _ in pairs], 2)
-        self._radii = np.tile([diameter / 2.0 for _, _, _, diameter in pairs], 2)
+        self._sides = np.array([-1.0] * len(pairs) + [1.0] * len(pairs))
+        self._half_separations = np.array([separation / 2.0 for _, _, separation, _ in pairs] * 2)
+        self._radii = np.array([diameter / 2.0 for _, _, _, diameter in pairs] * 2)
         self._joints = config.left_joints + config.right_joints
         self.acceleration = config.max_wheel_acceleration / self._radii  # rad/s^2, per wheel
         self.targets = np.zeros(len(self._joints))
