@@ -129,7 +129,8 @@ class Pacer:
         if self.free_running:
             return 0
         longest = min(MAX_REAL_TIME_PERIOD, MAX_TICK_SIMULATED / self.real_time_factor)
-        period = min(longest, max(REAL_TIME_PERIOD, REAL_TIME_SHARE * self.executor_turn))
+        # Never below REAL_TIME_PERIOD: far faster than real time, a period of 0 would spin.
+        period = max(REAL_TIME_PERIOD, min(longest, REAL_TIME_SHARE * self.executor_turn))
         return round(period * 1e3) * 1_000_000
 
     def chunks(self, sim_time, other_due=lambda: math.inf):

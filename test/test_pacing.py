@@ -168,6 +168,9 @@ def test_tick_periods_follow_the_executor_turn():
     # Five times real time, a tick steps no more than 20 ms of simulated time either.
     pacer.set_real_time_factor(5.0, world.time)
     assert pacer.tick_period_ns(paused=False) == 4_000_000
+    # Far faster, the period stays REAL_TIME_PERIOD rather than 0, which would spin.
+    pacer.set_real_time_factor(100.0, world.time)
+    assert pacer.tick_period_ns(paused=False) == 2_000_000
 
     free, *_ = make(0.0)
     assert free.first_tick_period == 0.0 and free.tick_period_ns(paused=False) == 0
