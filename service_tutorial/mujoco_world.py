@@ -29,8 +29,7 @@ from service_tutorial.conversions import pose_from_msg, time_msg, twist_from_msg
 from service_tutorial.conversions import yaw_quaternion
 from service_tutorial.log_forwarding import forward_core_logs
 from service_tutorial.model_interface import ModelInterface
-from service_tutorial.pacing import CLOCK_STREAM, JOINT_STATES_STREAM, MAX_DEFERRAL
-from service_tutorial.pacing import ODOMETRY_STREAM, Pacer
+from service_tutorial.pacing import CLOCK_STREAM, JOINT_STATES_STREAM, ODOMETRY_STREAM, Pacer
 from service_tutorial.robot_files import file_model_name, read_robot_file
 from service_tutorial.ros_names import normalise_namespace
 from service_tutorial.sim.validation import WorldError
@@ -118,7 +117,6 @@ class MujocoWorld(Node):
         self._clock_msg = Clock()
         self.models = {}  # name -> ModelInterface, in spawn order
         self._next_face_look = 0.0  # wall time
-        self._last_tick = 0.0  # wall time the last tick started
         self.robot_descriptions = {}  # name -> RobotDescriptionPublisher, models with topics
         self.viewer = None
 
@@ -198,7 +196,6 @@ class MujocoWorld(Node):
     def step_callback(self):
         """Advance the physics as the pacer says, publishing what falls due on the way."""
         world, pacer = self.world, self.pacer
-        self._last_tick = time.monotonic()
         pacer.start_tick()
         period_ns = pacer.tick_period_ns(world.paused)
         if self.step_timer.timer_period_ns != period_ns:
@@ -331,11 +328,8 @@ class MujocoWorld(Node):
             try:
                 return operation()
             finally:
-                self.pacer.hold(time.monotonic() - start)
-                # The next tick a whole period on, so that a client's next call finds the
-                # executor free; calls back to back put stepping off by MAX_DEFERRAL at most.
-                if start - self._last_tick < MAX_DEFERRAL:
-                    self.step_timer.reset()
+                if self.pacer.hold(start):
+                    self.step_timer.reset()  # the next tick a whole period from now
         return held
 
     def _answer(self, service, operation, response):

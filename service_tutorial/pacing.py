@@ -69,6 +69,7 @@ class Pacer:
         self.step_wall_time = 1e-5  # running estimate of one physics step, in wall seconds
         self.executor_turn = 0.0  # running estimate of the CPU time between two ticks
         self._tick_end_cpu = None
+        self._tick_started = 0.0  # wall time
         self._wall_anchor = wall_clock()
         self._sim_anchor = 0.0
         self._next_repeat = 0.0
@@ -85,14 +86,18 @@ class Pacer:
         self._wall_anchor = self._wall_clock()
         self._sim_anchor = sim_time
 
-    def hold(self, wall_seconds):
+    def hold(self, busy_since):
         """
-        Let simulation time stand still for wall_seconds the world was busy (a spawn, a delete).
+        Let simulation time stand still while the world was busy (a spawn, a delete) until now.
 
-        As in Gazebo, the world does not race to make up the time afterwards: the steps that
-        were due before are still taken, the time the world was busy is not.
+        busy_since is a time of the wall clock. As in Gazebo, the world does not race to make
+        up the time afterwards: the steps that were due before are still taken, the time the
+        world was busy is not. Return whether the next tick may come a whole period from now,
+        so that a client's next call finds the executor free: calls back to back put stepping
+        off by MAX_DEFERRAL at most.
         """
-        self._wall_anchor += max(0.0, wall_seconds)
+        self._wall_anchor += max(0.0, self._wall_clock() - busy_since)
+        return busy_since - self._tick_started < MAX_DEFERRAL
 
     def set_real_time_factor(self, real_time_factor, sim_time):
         """Run at another pace (0: free-running) from simulation time sim_time on."""
@@ -111,7 +116,8 @@ class Pacer:
         return True
 
     def start_tick(self):
-        """Note the CPU time the executor spent since the last tick ended."""
+        """Note when a tick starts, and the CPU time the executor spent since the last one."""
+        self._tick_started = self._wall_clock()
         now = self._cpu_clock()
         if self._tick_end_cpu is not None:
             # Follows the cheapest recent turns: a slow service call is not overhead.

@@ -96,13 +96,26 @@ def test_real_time_does_not_catch_up_more_than_a_tenth_of_a_second():
 def test_time_the_world_was_held_is_not_made_up_but_steps_due_before_are_taken():
     pacer, world, wall, _ = make(1.0)
     wall.now += 0.004  # two steps fall due
-    pacer.hold(0.010)  # then a spawn keeps the world busy for 10 ms
-    wall.now += 0.010
+    busy_since = wall.now
+    wall.now += 0.010  # then a spawn keeps the world busy for 10 ms
+    pacer.hold(busy_since)
     world.tick()
     assert world.steps == 2
     wall.now += 0.02
     world.tick()
     assert world.steps == 2 + 10
+
+
+def test_a_spawn_puts_the_next_tick_off_unless_ticks_were_already_put_off_too_long():
+    pacer, _, wall, _ = make(1.0)
+    pacer.start_tick()
+    wall.now += 0.005
+    assert pacer.hold(wall.now - 0.001)  # a call soon after a tick: the next may wait
+    wall.now += pacing.MAX_DEFERRAL
+    # Calls back to back since that tick: the next tick comes now.
+    assert not pacer.hold(wall.now - 0.001)
+    pacer.start_tick()
+    assert pacer.hold(wall.now)
 
 
 def test_stepping_also_stops_where_something_else_falls_due():
