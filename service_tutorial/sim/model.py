@@ -117,9 +117,9 @@ class Model:
         """Find the model's elements in the world's compiled model, then its plugins'."""
         mj_model = world.model
         description = self.description
-        body = mujoco.mjtObj.mjOBJ_BODY
-        bodies = {self.element_id(mj_model, body, link) for link in description.links}
-        self.root_id = self.element_id(mj_model, body, description.root_link)
+        bodies = {self.element_id(mj_model, mujoco.mjtObj.mjOBJ_BODY, link)
+                  for link in description.links}
+        self.root_id = self.element_id(mj_model, mujoco.mjtObj.mjOBJ_BODY, description.root_link)
         self.free_qpos_adr = self.free_dof_adr = None
         qpos, dofs = [], []
         for joint_id in (joint for joint, body in enumerate(mj_model.jnt_bodyid.tolist())
