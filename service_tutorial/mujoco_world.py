@@ -218,12 +218,12 @@ class MujocoWorld(Node):
         for name in self.world.take_removed_models():  # they kept blowing up
             self._forget_model(name)
         now = self.world.time
-        for stream in self.pacer.take_due(now):
+        for stream, stamp in self.pacer.take_due(now):
             if stream == CLOCK_STREAM:
-                self._publish_clock_msg(now)
+                self._publish_clock_msg(stamp)
             else:
                 for model in self.models.values():
-                    model.publish(stream, now)
+                    model.publish(stream, stamp)
         wall = time.monotonic()
         if wall >= self._next_face_look:
             self._next_face_look = wall + FACE_LOOK_PERIOD

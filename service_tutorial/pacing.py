@@ -7,12 +7,15 @@ parameters, so the tests drive a Pacer with fake clocks.
 Streams (/clock, odometry, joint states) fall due at their rates in simulation time, with half
 a step of slack, since simulation time is a sum of steps and carries rounding errors. In real
 time (real_time_factor above 0) a tick steps as far as the wall clock says, in chunks that end
-where a stream falls due. Free-running (real_time_factor 0) a tick steps for a budget of wall
-time, and each stream is also held to its rate in wall time: far faster than real time, the
-simulated rates would cost more than the physics.
+where a stream that carries the world's state (odometry, joint states) falls due. /clock only
+tells the time, so it does not end chunks (TIME_ONLY_STREAMS): each of its turns that a chunk
+stepped past goes out after the chunk, stamped with the step at its turn. A chunk of 2 steps
+per /clock message cost more than the steps. Free-running (real_time_factor 0) a tick steps for
+a budget of wall time, and each stream is also held to its rate in wall time, so every stream
+ends chunks: far faster than real time, the simulated rates would cost more than the physics.
 
 The executor's turn between two ticks costs CPU time that grows with the node's topics (about
-1.8 ms with 50 robots), so ticks are spaced to keep it a small share of the time. Free-running,
+0.6 ms with 50 robots), so ticks are spaced to keep it a small share of the time. Free-running,
 a tick steps EXECUTOR_SHARE times as long as a turn (STEP_BUDGET to MAX_STEP_BUDGET); in real
 time, ticks come every REAL_TIME_SHARE turns (REAL_TIME_PERIOD to MAX_REAL_TIME_PERIOD, and
 no more than MAX_TICK_SIMULATED of simulated time apart); paused, there is nothing to step and
@@ -34,10 +37,11 @@ import time
 CLOCK_STREAM = 'clock'
 ODOMETRY_STREAM = 'odom'
 JOINT_STATES_STREAM = 'joint_states'
+TIME_ONLY_STREAMS = (CLOCK_STREAM,)
 STEP_BUDGET = 0.005
 EXECUTOR_SHARE = 40.0
 MAX_STEP_BUDGET = 0.05
-REAL_TIME_SHARE = 20.0
+REAL_TIME_SHARE = 40.0
 REAL_TIME_PERIOD = 0.002
 MAX_REAL_TIME_PERIOD = 0.02
 # At most this much simulated time per tick: a command waits for the next tick, so a tick of
@@ -62,6 +66,7 @@ class Pacer:
         self.real_time_factor = max(0.0, real_time_factor)
         self.free_running = self.real_time_factor == 0.0
         self._periods = dict(periods)
+        self._state_streams = [name for name in self._periods if name not in TIME_ONLY_STREAMS]
         self._next_sim = dict.fromkeys(self._periods, 0.0)
         self._next_wall = dict.fromkeys(self._periods, 0.0)
         self._wall_clock = wall_clock
@@ -178,7 +183,8 @@ class Pacer:
 
     def steps_to_next_due(self, now, other_due=math.inf, *, limit):
         """Return the steps until a stream (or other_due) falls due, 1 to limit."""
-        due = min(min(self._next_sim.values(), default=math.inf), other_due)
+        due = min((self._next_sim[name] for name in self._state_streams), default=math.inf)
+        due = min(due, other_due)
         # Half a step of slack, as in take_due().
         steps = (due - now) / self.timestep - 0.5
         if steps >= limit:  # also when nothing is due at all
@@ -198,15 +204,34 @@ class Pacer:
     # --- streams ------------------------------------------------------------------------------
 
     def take_due(self, now):
-        """Return the streams due at simulation time now, each scheduled for its next turn."""
+        """
+        Return (stream, stamp) for each turn due by simulation time now, in order of stamps.
+
+        A stream that carries state is stamped now. In real time, a time-only stream (/clock)
+        gives each turn the last chunk stepped past, stamped with the step at its turn, one
+        per step at most, and keeps to its period on average; the stream is then scheduled
+        for its next turn.
+        """
         # Half a step of slack: simulation time is a sum of steps and carries rounding errors.
         soon = now + 0.5 * self.timestep
         wall = self._wall_clock()
-        due = [name for name in self._periods
-               if soon >= self._next_sim[name] and wall >= self._next_wall[name]]
-        for name in due:
-            self.published(name, now)
-        return due
+        due = []
+        for name in self._periods:
+            turn = self._next_sim[name]
+            if soon < turn or wall < self._next_wall[name]:
+                continue
+            if name in TIME_ONLY_STREAMS and not self.free_running and now - turn < MAX_LAG:
+                period = self._periods[name]
+                while turn <= soon:
+                    # A turn's step: the one that ended within half a step of it.
+                    stamp = now - self.timestep * math.floor((now - turn) / self.timestep + 0.5)
+                    due.append((name, stamp))
+                    turn = max(turn + period, stamp + self.timestep)
+                self._next_sim[name] = turn
+            else:
+                due.append((name, now))
+                self.published(name, now)
+        return sorted(due, key=lambda turn: turn[1])
 
     def published(self, name, now):
         """Schedule a stream's next turn after it was published at simulation time now."""

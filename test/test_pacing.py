@@ -30,6 +30,7 @@ class FakeWorld:
         self.steps = 0
         self.chunks = []
         self.published = {name: [] for name in RATES}
+        self.stamps = {name: [] for name in RATES}
         self.other_due = math.inf
 
     @property
@@ -46,8 +47,9 @@ class FakeWorld:
         self.publish_due()
 
     def publish_due(self):
-        for name in self.pacer.take_due(self.time):
+        for name, stamp in self.pacer.take_due(self.time):
             self.published[name].append(self.steps)
+            self.stamps[name].append(round(stamp / TIMESTEP))
 
 
 def make(real_time_factor, step_cost=0.0):
@@ -68,10 +70,28 @@ def test_real_time_steps_as_far_as_the_wall_clock_went_and_publishes_at_the_rate
     wall.now += 0.1
     world.tick()
     assert world.steps == 50
-    # The chunks end where /clock falls due, so every stream goes out on its own step.
-    assert world.chunks == [2] * 25
-    assert world.published['clock'] == list(range(0, 51, 2))
-    assert world.published['odom'] == [0, 10, 20, 30, 40, 50]
+    # The chunks end where odometry falls due, which needs the world's state at its step.
+    assert world.chunks == [10] * 5
+    assert world.published['odom'] == world.stamps['odom'] == [0, 10, 20, 30, 40, 50]
+    # /clock only tells the time: its turns go out after each chunk, stamped with their step.
+    assert world.stamps['clock'] == list(range(0, 51, 2))
+    assert world.published['clock'] == [0] + [10 * (1 + i // 5) for i in range(25)]
+
+
+def test_clock_turns_a_chunk_passed_go_out_in_order_one_per_step_at_most():
+    pacer, world, wall, _ = make(1.0)
+    world.tick()
+    pacer.set_period('clock', 0.003)  # every step and a half
+    wall.now += 0.06
+    world.tick()
+    stamps = world.stamps['clock'][1:]
+    assert stamps == sorted(stamps) and len(set(stamps)) == len(stamps)
+    assert {b - a for a, b in zip(stamps, stamps[1:])} == {1, 2}
+    assert len(stamps) == pytest.approx(0.06 / 0.003, abs=1)
+    pacer.set_period('clock', 0.0001)  # far shorter than a step: once per step
+    wall.now += 0.02
+    world.tick()
+    assert world.stamps['clock'][-10:] == list(range(world.steps - 9, world.steps + 1))
 
 
 def test_real_time_factor_two_runs_twice_as_fast():
@@ -125,7 +145,7 @@ def test_stepping_also_stops_where_something_else_falls_due():
     world.other_due = 0.011  # the camera: 5.5 steps away, due at step 6 with half a step slack
     wall.now += 0.02
     world.tick()
-    assert world.chunks[:3] == [2, 2, 1], 'the chunk ends at step 5, the camera within reach'
+    assert world.chunks[0] == 5, 'the chunk ends at step 5, the camera within reach'
     # Free-running too, where /clock is held back by wall time and does not end the chunks.
     pacer, world, wall, _ = make(0.0, step_cost=1e-5)
     world.other_due = 0.1
@@ -170,13 +190,13 @@ def test_tick_periods_follow_the_executor_turn():
         cpu.now += seconds
         pacer.start_tick()
     for _ in range(200):
-        turn(0.0005)  # 0.5 ms between ticks: ticks every 20 turns, 10 ms
-    assert pacer.executor_turn == pytest.approx(0.0005)
+        turn(0.00025)  # 0.25 ms between ticks: ticks every 40 turns, 10 ms
+    assert pacer.executor_turn == pytest.approx(0.00025)
     assert pacer.tick_period_ns(paused=False) == 10_000_000
     turn(0.5)  # a slow service call is not overhead: the estimate barely moves
-    assert pacer.executor_turn < 0.00055
+    assert pacer.executor_turn < 0.0003
     for _ in range(200):
-        turn(0.003)  # 20 turns would be 60 ms
+        turn(0.003)  # 40 turns would be 120 ms
     assert pacer.tick_period_ns(paused=False) == 20_000_000, 'at most 20 ms'
     # Five times real time, a tick steps no more than 20 ms of simulated time either.
     pacer.set_real_time_factor(5.0, world.time)
@@ -192,16 +212,17 @@ def test_tick_periods_follow_the_executor_turn():
 
 def test_a_stream_is_due_within_half_a_step_and_after_a_reset_at_once():
     pacer, world, wall, _ = make(1.0)
-    assert pacer.take_due(0.0) == ['clock', 'odom']
+    assert pacer.take_due(0.0) == [('clock', 0.0), ('odom', 0.0)]
     assert pacer.take_due(0.0) == []
     # Three steps of 0.002 s add up to a little less than 0.006: still the same step.
     assert 3 * TIMESTEP < 0.006 + 1e-12
     pacer.published('clock', 0.002)
-    assert pacer.take_due(0.002 + 0.002 + 0.002 - 1e-9) == ['clock']
+    now = 0.002 + 0.002 + 0.002 - 1e-9
+    assert pacer.take_due(now) == [('clock', now)]
     pacer.take_due(1.0)
     assert pacer.take_due(0.0) == [], 'simulation time went back; nothing is due'
     pacer.restart(0.0, ['odom'])
-    assert pacer.take_due(0.0) == ['odom']
+    assert pacer.take_due(0.0) == [('odom', 0.0)]
 
 
 def test_with_nothing_due_a_chunk_takes_every_step_it_may():
