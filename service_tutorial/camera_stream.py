@@ -21,10 +21,10 @@ from sensor_msgs.msg import CameraInfo, Image
 from service_tutorial.conversions import time_msg
 from service_tutorial.image_files import write_png
 from service_tutorial.sim.rendering import SceneCamera
+from service_tutorial.subscribers import SUBSCRIBER_CHECK_PERIOD
 from std_srvs.srv import Trigger
 
 CAMERA_FRAME = 'camera_optical_frame'  # z forward, x right, y down (REP 103, optical frames)
-SUBSCRIBER_CHECK_PERIOD = 0.2  # s of wall time between two looks for a first subscriber
 # The world parameters the camera follows, and those of them that make a new camera.
 VIEW_PARAMETERS = ('camera_width', 'camera_height', 'camera_position', 'camera_look_at',
                    'camera_fovy')

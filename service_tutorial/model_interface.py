@@ -24,6 +24,7 @@ from service_tutorial.sim.plugins.drive_config import is_ros1_block
 from service_tutorial.sim.plugins.drive_config import ODOMETRY_SOURCE_ENCODER
 from service_tutorial.sim.validation import finite_number
 from service_tutorial.sim.validation import WorldError
+from service_tutorial.subscribers import SubscriberWatch
 from service_tutorial.tf_interface import OdomTfInterface
 
 
@@ -70,15 +71,18 @@ class DriveInterface:
         self.encoder_odometry = config.odometry_source == ODOMETRY_SOURCE_ENCODER
         self.odom_pub = self.joint_states_pub = None
         self._publishers = {}
+        self._watches = {}
         quiet = PublisherEventCallbacks(use_default_callbacks=False)
         if config.publish_odom:
             self.odom_pub = node.create_publisher(Odometry, odom_topic, 10,
                                                   event_callbacks=quiet)
             self._publishers[ODOMETRY_STREAM] = self.publish_odometry
+            self._watches[ODOMETRY_STREAM] = SubscriberWatch(self.odom_pub)
         if publishes_joint_states(plugin):
             self.joint_states_pub = node.create_publisher(JointState, joint_states_topic, 10,
                                                           event_callbacks=quiet)
             self._publishers[JOINT_STATES_STREAM] = self.publish_joint_states
+            self._watches[JOINT_STATES_STREAM] = SubscriberWatch(self.joint_states_pub)
         # Filled in and published again every time: publish() copies the message.
         self.odom_msg = Odometry()
         if config.covariance is not None:
@@ -94,13 +98,12 @@ class DriveInterface:
             # One arc per odometry period, whether anyone listens or not.
             self.drive.integrate_encoders()
         publish = self._publishers.get(stream)
-        if publish is not None:
+        # Nobody would receive it: skip the message, the costly part.
+        if publish is not None and self._watches[stream].listened():
             publish(now)
 
     def publish_odometry(self, now):
         """Publish the robot's odometry in its odometry frame (REP 105)."""
-        if self.odom_pub.get_subscription_count() == 0:
-            return  # nobody would receive it: skip the message, the costly part
         odometry = self.drive.odometry()
         msg = self.odom_msg
         fill_time_msg(msg.header.stamp, now)
@@ -112,8 +115,6 @@ class DriveInterface:
 
     def publish_joint_states(self, now):
         """Publish the positions and velocities of the robot's moving joints."""
-        if self.joint_states_pub.get_subscription_count() == 0:
-            return
         names, positions, velocities = self.world.joint_state(self.model.name)
         msg = self.joint_states_msg
         fill_time_msg(msg.header.stamp, now)

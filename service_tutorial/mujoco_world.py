@@ -33,7 +33,7 @@ from service_tutorial.pacing import CLOCK_STREAM, JOINT_STATES_STREAM, ODOMETRY_
 from service_tutorial.robot_files import file_model_name, read_robot_file
 from service_tutorial.ros_names import normalise_namespace
 from service_tutorial.sim.validation import WorldError
-from service_tutorial.tf_interface import make_tf_publisher, RobotDescriptionPublisher
+from service_tutorial.tf_interface import RobotDescriptionPublisher, TransformBatch
 from service_tutorial.world_parameters import declare_world_parameters, run_or_exit
 from srv_interfaces.srv import DeleteModel, GetModelList, GetModelState, SetModelState
 from srv_interfaces.srv import SpawnModel
@@ -121,7 +121,7 @@ class MujocoWorld(Node):
         self.viewer = None
 
         self.clock_pub = self.create_publisher(Clock, '/clock', CLOCK_QOS)
-        self.tf_pub = make_tf_publisher(self)  # shared by the models' OdomTfInterfaces
+        self.tf_batch = TransformBatch(self)  # /tf, for every model's OdomTfInterface
         self.spawn_srv = self.create_service(
             SpawnModel, '~/spawn_urdf_model', self.spawn_model_callback)
         self.delete_srv = self.create_service(
@@ -224,6 +224,7 @@ class MujocoWorld(Node):
             else:
                 for model in self.models.values():
                     model.publish(stream, stamp)
+                self.tf_batch.send()
         wall = time.monotonic()
         if wall >= self._next_face_look:
             self._next_face_look = wall + FACE_LOOK_PERIOD

@@ -27,9 +27,8 @@ from service_tutorial.sim.plugins.imu_sensor import is_ros1_block as is_ros1_imu
 from service_tutorial.sim.plugins.ray_sensor import RaySensor
 from service_tutorial.sim.validation import quoted
 from service_tutorial.sim.validation import WorldError
+from service_tutorial.subscribers import SUBSCRIBER_CHECK_PERIOD
 
-# Wall time between two looks for subscribers, in s, as for the world node's camera.
-SUBSCRIBER_CHECK_PERIOD = 0.2
 # The one type a laser publishes here; gazebo_ros_ray_sensor can also give point clouds.
 LASER_SCAN_TYPE = 'sensor_msgs/LaserScan'
 # Tags that only the ROS 1 camera plugin reads.

@@ -5,8 +5,9 @@ OdomTfInterface is a plugin face (see model_interface.PLUGIN_INTERFACES): for a 
 block asks for it (publishOdomTF / publish_odom_tf, true unless the block says otherwise, as in
 Gazebo), it sends the odometry frame -> robot base frame transform on /tf each time odometry
 falls due, stamped with simulation time and carrying exactly the pose that `odom` carries at
-that stamp. The node has one /tf publisher for all of them (make_tf_publisher), as tf2_ros's
-TransformBroadcaster publishes on the absolute /tf whatever the node's namespace.
+that stamp. The node has one /tf publisher for all of them (TransformBatch), on the absolute
+/tf whatever the node's namespace, and the transforms of one turn go out in one TFMessage, as
+robot_state_publisher sends a robot's: a fleet's would otherwise be a message per robot.
 
 RobotDescriptionPublisher sends a model's URDF text once on `<namespace>/robot_description`
 (std_msgs/String), transient local with depth 1 as robot_state_publisher does, so a subscriber
@@ -19,6 +20,7 @@ from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from service_tutorial.conversions import fill_time_msg, fill_transform_msg
 from service_tutorial.pacing import ODOMETRY_STREAM
 from service_tutorial.ros_names import topic_prefix
+from service_tutorial.subscribers import SubscriberWatch
 from std_msgs.msg import String
 from tf2_msgs.msg import TFMessage
 
@@ -30,9 +32,30 @@ LATCHED_QOS = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
                          durability=DurabilityPolicy.TRANSIENT_LOCAL)
 
 
-def make_tf_publisher(node):
-    """Make the node's one /tf publisher, which every OdomTfInterface shares."""
-    return node.create_publisher(TFMessage, '/tf', TF_QOS)
+class TransformBatch:
+    """The node's one /tf publisher: the transforms added in one turn go out together."""
+
+    def __init__(self, node):
+        """Make the /tf publisher on node."""
+        self.tf_pub = node.create_publisher(TFMessage, '/tf', TF_QOS)
+        self._watch = SubscriberWatch(self.tf_pub)
+        self._tf_msg = TFMessage()
+        self._transforms = []
+
+    def wanted(self):
+        """Tell whether anyone listens to /tf, so that transforms are worth filling in."""
+        return self._watch.listened()
+
+    def add(self, transform):
+        """Queue a TransformStamped for send(); it must not change until then."""
+        self._transforms.append(transform)
+
+    def send(self):
+        """Publish the queued transforms in one TFMessage, if any."""
+        if self._transforms:
+            self._tf_msg.transforms = self._transforms
+            self.tf_pub.publish(self._tf_msg)
+            self._transforms = []
 
 
 class OdomTfInterface:
@@ -46,16 +69,15 @@ class OdomTfInterface:
         return getattr(plugin, 'is_drive', False) and plugin.config.publish_odom_tf
 
     def __init__(self, node, world, model, plugin, namespace):
-        """Send on the node's /tf publisher (node.tf_pub); /tf is global, whatever namespace."""
+        """Send through the node's TransformBatch (node.tf_batch), whatever the namespace."""
         self.drive = plugin
-        self.tf_pub = node.tf_pub
-        # Filled in and published again every time: publish() copies the message.
+        self.tf_batch = node.tf_batch
+        # Filled in and sent again every time: publish() copies the message.
         self.transform = TransformStamped()
-        self.tf_msg = TFMessage(transforms=[self.transform])
 
     def publish(self, stream, now):
-        """Send the transform when odometry falls due at simulation time now."""
-        if self.tf_pub.get_subscription_count() == 0:
+        """Queue the transform when odometry falls due at simulation time now."""
+        if not self.tf_batch.wanted():
             return
         # Encoder odometry integrated a moment ago by the drive face gives the same values.
         odometry = self.drive.odometry()
@@ -64,7 +86,7 @@ class OdomTfInterface:
         transform.header.frame_id = odometry.odometry_frame
         transform.child_frame_id = odometry.robot_base_frame
         fill_transform_msg(transform.transform, odometry.position, odometry.orientation)
-        self.tf_pub.publish(self.tf_msg)
+        self.tf_batch.add(transform)
 
     def destroy(self):
         """Leave the shared /tf publisher to the node."""
