@@ -85,8 +85,8 @@ class World:
     """
     A MuJoCo world with a ground plane into which URDF robots are spawned and deleted.
 
-    rebuild(), forward(), state_changed(), schedule_events() and body_state() are there for
-    the core's own pieces, recovery and plugins; nodes use the rest.
+    rebuild(), forward(), state_changed(), schedule_events(), schedule_event() and
+    body_state() are there for the core's own pieces, recovery and plugins; nodes use the rest.
     """
 
     def __init__(self, *, timestep=0.002, gravity=(0.0, 0.0, -9.81), cmd_vel_timeout=0.5,
@@ -336,6 +336,15 @@ class World:
     def schedule_events(self):
         """Work out when a plugin next needs its update()."""
         self._next_event = plugins.next_event(self._models.values())
+
+    def schedule_event(self, time):
+        """
+        Let a plugin whose next event moved to simulation time time have its update() then.
+
+        Cheaper than schedule_events() with many models: an event that moved later only costs
+        one update() call that finds nothing due.
+        """
+        self._next_event = min(self._next_event, time)
 
     def _update_plugins(self):
         plugins.update_due(self._models.values(), self._data.time + 0.5 * self._timestep)

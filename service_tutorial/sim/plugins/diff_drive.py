@@ -229,7 +229,7 @@ class DiffDrive(Plugin):
         self._set_wheel_targets(rims / self._radii)
         self.commanded_at = self.world.data.time
         self.set_timeout(self.world.cmd_vel_timeout)
-        self.world.schedule_events()
+        self.world.schedule_event(self.next_event())
         return linear_x, angular_z
 
     def set_timeout(self, timeout):

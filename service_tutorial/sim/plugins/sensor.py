@@ -109,7 +109,7 @@ class Sensor(Plugin):
             return
         self.active = active
         self._next_reading = self.world.time if active else math.inf
-        self.world.schedule_events()
+        self.world.schedule_event(self._next_reading)
 
     def next_event(self):
         """Return when the next reading is due; never while inactive."""
