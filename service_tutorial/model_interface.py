@@ -8,7 +8,9 @@ odom and joint_states out, like gazebo_ros_diff_drive and gazebo_ros_skid_steer_
 odometry on /tf (tf_interface.py) and the sensors (sensor_interfaces.py). Each face is a class
 in PLUGIN_INTERFACES: a class method applies_to(plugin), a constructor (node, world, model,
 plugin, namespace), the node's publication streams it takes part in (streams) with
-publish(stream, now), look(wall_time) for a face that watches for subscribers, and destroy().
+publish(stream, now), look(wall_time) for a face that watches for subscribers,
+take_commands() for a face whose commands the node takes at each tick (taken_at_tick.py), and
+destroy().
 """
 
 from geometry_msgs.msg import Twist
@@ -25,6 +27,7 @@ from service_tutorial.sim.plugins.drive_config import ODOMETRY_SOURCE_ENCODER
 from service_tutorial.sim.validation import finite_number
 from service_tutorial.sim.validation import WorldError
 from service_tutorial.subscribers import SubscriberWatch
+from service_tutorial.taken_at_tick import take_messages, TakenAtTick
 from service_tutorial.tf_interface import OdomTfInterface
 
 
@@ -64,9 +67,10 @@ class DriveInterface:
                                     ('joint_states', None)))
         # Without rclpy's default event handlers (they log incompatible QoS), a topic costs
         # the executor nothing; with them, every robot's added several waitables to every
-        # turn, and 50 robots' 400 were most of the world's CPU at real time.
+        # turn, and 50 robots' 400 were most of the world's CPU at real time. The node takes
+        # the commands at each tick (take_commands), so they never wake its executor.
         self.cmd_vel_sub = node.create_subscription(
-            Twist, cmd_vel_topic, self.cmd_vel_callback, 10,
+            Twist, cmd_vel_topic, self.cmd_vel_callback, 10, callback_group=TakenAtTick(),
             event_callbacks=SubscriptionEventCallbacks(use_default_callbacks=False))
         self.encoder_odometry = config.odometry_source == ODOMETRY_SOURCE_ENCODER
         self.odom_pub = self.joint_states_pub = None
@@ -123,6 +127,11 @@ class DriveInterface:
         msg.velocity = velocities.tolist()
         self.joint_states_pub.publish(msg)
 
+    def take_commands(self):
+        """Hand the cmd_vel messages that came since the last tick to the drive, in order."""
+        for msg in take_messages(self.cmd_vel_sub):
+            self.cmd_vel_callback(msg)
+
     def cmd_vel_callback(self, msg):
         """Hand a velocity command to the drive; the next steps apply it."""
         name = self.model.name
@@ -175,11 +184,17 @@ class ModelInterface:
             for stream in plugin.streams:
                 self._publishing.setdefault(stream, []).append(plugin)
         self._watching = [plugin for plugin in self.plugins if hasattr(plugin, 'look')]
+        self._commanded = [plugin for plugin in self.plugins if hasattr(plugin, 'take_commands')]
 
     def publish(self, stream, now):
         """Publish each plugin's part of a stream that fell due at simulation time now."""
         for plugin in self._publishing.get(stream, ()):
             plugin.publish(stream, now)
+
+    def take_commands(self):
+        """Let the faces that take commands (a drive's cmd_vel) take those that came."""
+        for plugin in self._commanded:
+            plugin.take_commands()
 
     def look(self, wall_time):
         """Let the faces that watch their topics see whether anyone subscribes."""

@@ -7,7 +7,8 @@ odometry on /tf) come from its ModelInterface, made when the model is spawned, a
 topics also gets its URDF on robot_description. A Pacer decides how far each tick steps and
 which streams are due. Stepping runs in a timer of the node's single callback group, so a
 service callback, a parameter change and a physics step never run at the same time and no locks
-are needed.
+are needed. Each tick first takes the velocity commands that came since the last one: they
+never wake the executor (taken_at_tick.py).
 
 The parameters are declared in world_parameters.py, and every one that is not read-only takes
 effect as soon as it is set. What the simulation logs reaches the node's logger (and /rosout).
@@ -197,6 +198,8 @@ class MujocoWorld(Node):
         """Advance the physics as the pacer says, publishing what falls due on the way."""
         world, pacer = self.world, self.pacer
         pacer.start_tick()
+        for model in self.models.values():
+            model.take_commands()  # they never wake the executor: see taken_at_tick.py
         period_ns = pacer.tick_period_ns(world.paused)
         if self.step_timer.timer_period_ns != period_ns:
             self.step_timer.timer_period_ns = period_ns
