@@ -8,7 +8,8 @@ odom and joint_states out, like gazebo_ros_diff_drive and gazebo_ros_skid_steer_
 odometry on /tf (tf_interface.py) and the sensors (sensor_interfaces.py). Each face is a class
 in PLUGIN_INTERFACES: a class method applies_to(plugin), a constructor (node, world, model,
 plugin, namespace), the node's publication streams it takes part in (streams) with
-publish(stream, now), look(wall_time) for a face that watches for subscribers,
+publish(stream, now), watchers for a face that watches for subscribers (objects with
+look(wall_time) and next_look, the wall time at which looking has something to do),
 take_commands() for a face whose commands the node takes at each tick (taken_at_tick.py), and
 destroy().
 """
@@ -183,7 +184,8 @@ class ModelInterface:
         for plugin in self.plugins:
             for stream in plugin.streams:
                 self._publishing.setdefault(stream, []).append(plugin)
-        self._watching = [plugin for plugin in self.plugins if hasattr(plugin, 'look')]
+        self.watchers = [watcher for plugin in self.plugins
+                         for watcher in getattr(plugin, 'watchers', ())]
         self._commanded = [plugin for plugin in self.plugins if hasattr(plugin, 'take_commands')]
 
     def publish(self, stream, now):
@@ -195,11 +197,6 @@ class ModelInterface:
         """Let the faces that take commands (a drive's cmd_vel) take those that came."""
         for plugin in self._commanded:
             plugin.take_commands()
-
-    def look(self, wall_time):
-        """Let the faces that watch their topics see whether anyone subscribes."""
-        for plugin in self._watching:
-            plugin.look(wall_time)
 
     def destroy(self):
         """Remove every topic of the model from the node."""

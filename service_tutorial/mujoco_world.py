@@ -232,7 +232,9 @@ class MujocoWorld(Node):
         if wall >= self._next_face_look:
             self._next_face_look = wall + FACE_LOOK_PERIOD
             for model in self.models.values():
-                model.look(wall)
+                for watcher in model.watchers:
+                    if wall >= watcher.next_look:
+                        watcher.look(wall)
         self.camera_stream.publish_due(now)
 
     def publish_clock(self):

@@ -15,6 +15,7 @@ the sensor's link.
 """
 
 import array
+import math
 import time
 
 from rclpy.event_handler import PublisherEventCallbacks
@@ -59,7 +60,8 @@ class SensorFace:
         self.publishers = []
         self.listened = False
         self.next_check = 0.0  # wall time of the next look for subscribers
-        self.resume_at = None  # wall time at which a sensor held free-running measures again
+        self.resume_at = math.inf  # wall time at which a sensor held free-running measures again
+        self.next_look = 0.0  # wall time at which look() has something to do
         sensor.listener = self.reading_callback
 
     def publisher(self, msg_type, topic, depth):
@@ -71,7 +73,7 @@ class SensorFace:
         self.publishers.append(publisher)
         return publisher
 
-    def check(self, wall_time):
+    def look(self, wall_time):
         """Switch the sensor on or off as its topics have subscribers, or a hold ends."""
         changed = False
         if wall_time >= self.next_check:
@@ -79,13 +81,14 @@ class SensorFace:
             listened = any(publisher.get_subscription_count() > 0
                            for publisher in self.publishers)
             changed, self.listened = listened != self.listened, listened
-        if self.resume_at is not None and wall_time >= self.resume_at:
-            self.resume_at, changed = None, True
+        if wall_time >= self.resume_at:
+            self.resume_at, changed = math.inf, True
+        self.next_look = min(self.next_check, self.resume_at)
         if changed:
             self._switch()
 
     def _switch(self):
-        self.sensor.set_active(self.listened and self.resume_at is None)
+        self.sensor.set_active(self.listened and self.resume_at == math.inf)
 
     def reading_callback(self, sensor):
         """Publish a reading; free-running, hold the sensor for its period of wall time."""
@@ -94,6 +97,7 @@ class SensorFace:
         if node.has_parameter('real_time_factor') and \
                 node.get_parameter('real_time_factor').value <= 0.0:
             self.resume_at = time.monotonic() + sensor.period
+            self.next_look = min(self.next_check, self.resume_at)
             self._switch()
 
     def publish_reading(self, sensor):
@@ -266,18 +270,14 @@ class SensorInterface:
 
     def __init__(self, node, world, model, plugin, namespace):
         """Give the sensor its topics, in the model's namespace."""
-        self.faces = [self.face_type(node, plugin, namespace)]
-
-    def look(self, wall_time):
-        """Look for subscribers, and end the holds that are due by wall_time."""
-        for face in self.faces:
-            face.check(wall_time)
+        # The node has each watcher look (SensorFace.look) once its next_look comes.
+        self.watchers = [self.face_type(node, plugin, namespace)]
 
     def destroy(self):
         """Stop the sensors and remove their topics."""
-        for face in self.faces:
+        for face in self.watchers:
             face.destroy()
-        self.faces = []
+        self.watchers = []
 
 
 class LaserScanInterface(SensorInterface):
