@@ -19,6 +19,7 @@ import time
 
 from ament_index_python.packages import get_package_share_directory
 from rclpy.clock import Clock as WallClock, ClockType
+from rclpy.event_handler import PublisherEventCallbacks
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
@@ -121,7 +122,11 @@ class MujocoWorld(Node):
         self.robot_descriptions = {}  # name -> RobotDescriptionPublisher, models with topics
         self.viewer = None
 
-        self.clock_pub = self.create_publisher(Clock, '/clock', CLOCK_QOS)
+        # Reliable and transient local, /clock suits every subscriber's QoS: rclpy's default
+        # handlers of incompatible QoS would only add to every executor turn's wait set.
+        self.clock_pub = self.create_publisher(
+            Clock, '/clock', CLOCK_QOS,
+            event_callbacks=PublisherEventCallbacks(use_default_callbacks=False))
         self.tf_batch = TransformBatch(self)  # /tf, for every model's OdomTfInterface
         self.spawn_srv = self.create_service(
             SpawnModel, '~/spawn_urdf_model', self.spawn_model_callback)
