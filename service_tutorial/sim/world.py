@@ -105,7 +105,6 @@ class World:
         _route_mujoco_messages()
         self._timestep = timestep
         self._cmd_vel_timeout = cmd_vel_timeout
-        self._package_resolver = package_resolver
         self._paused = False
         self._models = {}
         self._descriptions = DescriptionCache(package_resolver, timestep)
@@ -223,8 +222,7 @@ class World:
                              'other models?')
         model.reset_plugins()
         self.schedule_events()
-        _logger.info("spawned model '%s' at %s", name,
-                     np.round(model.spawn_position, 4).tolist())
+        _logger.info("spawned model '%s' at %s", name, np.round(model.spawn_position, 4).tolist())
         for note in description.notes:
             _logger.warning("model '%s': %s", name, note)
         return model
@@ -338,13 +336,8 @@ class World:
         self._next_event = plugins.next_event(self._models.values())
 
     def schedule_event(self, time):
-        """
-        Let a plugin whose next event moved to simulation time time have its update() then.
-
-        Cheaper than schedule_events() with many models: an event that moved later only costs
-        one update() call that finds nothing due.
-        """
-        self._next_event = min(self._next_event, time)
+        """Update plugins by simulation time time too: cheaper than schedule_events()."""
+        self._next_event = min(self._next_event, time)  # later: one update() finds nothing
 
     def _update_plugins(self):
         plugins.update_due(self._models.values(), self._data.time + 0.5 * self._timestep)
