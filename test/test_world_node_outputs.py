@@ -149,6 +149,19 @@ def test_tf_carries_odom_to_base_exactly_as_odom_says(ros):
     assert abs(odometry[-1].pose.pose.position.y) > 0.01, 'tinybot did not move'
 
 
+def test_the_transforms_of_one_turn_go_out_in_one_tf_message(ros):
+    world = start_world(ros, real_time_factor=2.0)
+    spawn(ros, 'tiny', read_model('tinybot'), namespace='tiny', x=2.0)
+    transforms = ros.subscribe(TFMessage, '/tf', depth=1000)
+    assert ros.wait_for(lambda: any(len(m.transforms) == 2 for m in list(transforms))), \
+        'no /tf message carried both robots'
+    wait_sim(ros, world, 0.2)
+    for message in list(transforms):
+        assert len(message.transforms) in (1, 2)  # 1: a message sent before the spawn
+        stamps = {seconds_of(transform.header.stamp) for transform in message.transforms}
+        assert len(stamps) == 1, 'one message, one turn of odometry'
+
+
 def test_a_drive_whose_block_says_no_sends_no_tf(ros):
     world = start_world(ros)
     quiet = read_model('tinybot').replace('<publish_odom_tf>true</publish_odom_tf>',

@@ -1,0 +1,61 @@
+"""The world node's topic plumbing: subscriber watches and commands taken at each tick."""
+
+from geometry_msgs.msg import Twist, Vector3
+from rclpy.node import Node
+from service_tutorial.subscribers import SUBSCRIBER_CHECK_PERIOD, SubscriberWatch
+from service_tutorial.taken_at_tick import take_messages, TakenAtTick
+
+
+class FakeClock:
+    """A wall clock that stands still until a test moves it."""
+
+    def __init__(self):
+        self.now = 100.0
+
+    def __call__(self):
+        return self.now
+
+
+class CountingPublisher:
+    """Answers get_subscription_count() with a number the test sets, and counts the asks."""
+
+    def __init__(self):
+        self.subscribers = 0
+        self.asked = 0
+
+    def get_subscription_count(self):
+        self.asked += 1
+        return self.subscribers
+
+
+def test_a_watch_asks_once_per_period_and_sees_a_subscriber_come_and_go():
+    clock, publisher = FakeClock(), CountingPublisher()
+    watch = SubscriberWatch(publisher, wall_clock=clock)
+    assert not watch.listened() and publisher.asked == 1
+    publisher.subscribers = 1
+    for _ in range(100):
+        assert not watch.listened(), 'the answer holds until the period is over'
+    assert publisher.asked == 1
+    clock.now += SUBSCRIBER_CHECK_PERIOD
+    assert watch.listened() and publisher.asked == 2
+    publisher.subscribers = 0
+    clock.now += SUBSCRIBER_CHECK_PERIOD
+    assert not watch.listened() and publisher.asked == 3
+
+
+def test_commands_taken_at_tick_never_reach_the_executor_and_keep_their_order(ros):
+    world_side = ros.add_node(Node('taken_at_tick_world'))
+    served = []
+    subscription = world_side.create_subscription(
+        Twist, 'taken_at_tick_cmd_vel', served.append, 10, callback_group=TakenAtTick())
+    publisher = ros.client_node.create_publisher(Twist, 'taken_at_tick_cmd_vel', 10)
+    assert ros.wait_for(lambda: publisher.get_subscription_count() > 0)
+    for speed in (0.1, 0.2, 0.3):
+        publisher.publish(Twist(linear=Vector3(x=speed)))
+    taken = []
+    # The executor spins all along (ros.wait_for); had it served the subscription, its
+    # callback would have had the messages and nothing would be left to take.
+    assert ros.wait_for(lambda: taken.extend(take_messages(subscription)) or len(taken) == 3)
+    assert [msg.linear.x for msg in taken] == [0.1, 0.2, 0.3]
+    assert served == []
+    assert take_messages(subscription) == []
