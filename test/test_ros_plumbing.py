@@ -6,16 +6,6 @@ from service_tutorial.subscribers import SUBSCRIBER_CHECK_PERIOD, SubscriberWatc
 from service_tutorial.taken_at_tick import take_messages, TakenAtTick
 
 
-class FakeClock:
-    """A wall clock that stands still until a test moves it."""
-
-    def __init__(self):
-        self.now = 100.0
-
-    def __call__(self):
-        return self.now
-
-
 class CountingPublisher:
     """Answers get_subscription_count() with a number the test sets, and counts the asks."""
 
@@ -29,17 +19,18 @@ class CountingPublisher:
 
 
 def test_a_watch_asks_once_per_period_and_sees_a_subscriber_come_and_go():
-    clock, publisher = FakeClock(), CountingPublisher()
-    watch = SubscriberWatch(publisher, wall_clock=clock)
+    wall = [100.0]  # a wall clock that stands still until the test moves it
+    publisher = CountingPublisher()
+    watch = SubscriberWatch(publisher, wall_clock=lambda: wall[0])
     assert not watch.listened() and publisher.asked == 1
     publisher.subscribers = 1
     for _ in range(100):
         assert not watch.listened(), 'the answer holds until the period is over'
     assert publisher.asked == 1
-    clock.now += SUBSCRIBER_CHECK_PERIOD
+    wall[0] += SUBSCRIBER_CHECK_PERIOD
     assert watch.listened() and publisher.asked == 2
     publisher.subscribers = 0
-    clock.now += SUBSCRIBER_CHECK_PERIOD
+    wall[0] += SUBSCRIBER_CHECK_PERIOD
     assert not watch.listened() and publisher.asked == 3
 
 
