@@ -15,13 +15,12 @@ a new size, pose or field of view makes a new camera (its renderer again made on
 
 import math
 import os
-import time
 
 from sensor_msgs.msg import CameraInfo, Image
 from service_tutorial.conversions import time_msg
 from service_tutorial.image_files import write_png
 from service_tutorial.sim.rendering import SceneCamera
-from service_tutorial.subscribers import SUBSCRIBER_CHECK_PERIOD
+from service_tutorial.subscribers import SubscriberWatch
 from std_srvs.srv import Trigger
 
 CAMERA_FRAME = 'camera_optical_frame'  # z forward, x right, y down (REP 103, optical frames)
@@ -45,8 +44,8 @@ class CameraStream:
         self.camera = None
         self.snapshot_directory = os.getcwd()
         self.next_due = math.inf  # simulation time of the next frame; inf: nobody listens
-        self._next_subscriber_check = 0.0
         self.image_pub = self.info_pub = None
+        self._watch = None  # SubscriberWatch of both topics while enabled
         self.snapshot_srv = node.create_service(
             Trigger, '~/save_snapshot', self.save_snapshot_callback)
         self.configure(parameters)
@@ -70,11 +69,11 @@ class CameraStream:
         if enabled and not self.enabled:
             self.image_pub = self.node.create_publisher(Image, '~/camera/image_raw', 2)
             self.info_pub = self.node.create_publisher(CameraInfo, '~/camera/camera_info', 2)
-            self._next_subscriber_check = 0.0
+            self._watch = SubscriberWatch(self.image_pub, self.info_pub)
         elif self.enabled and not enabled:
             self.node.destroy_publisher(self.image_pub)
             self.node.destroy_publisher(self.info_pub)
-            self.image_pub = self.info_pub = None
+            self.image_pub = self.info_pub = self._watch = None
             self.next_due = math.inf
         self.enabled = enabled
         period = 1.0 / self.rate if enabled else math.inf
@@ -88,11 +87,7 @@ class CameraStream:
         if not self.enabled:
             return
         if self.next_due == math.inf:
-            wall = time.monotonic()
-            if wall < self._next_subscriber_check:
-                return
-            self._next_subscriber_check = wall + SUBSCRIBER_CHECK_PERIOD
-            if not self._listened_to():
+            if not self._watch.listened():
                 return
             self.next_due = now  # a first subscriber: the first frame is due now
         # Half a step of slack: simulation time is a sum of steps and carries rounding errors.

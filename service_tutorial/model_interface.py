@@ -75,19 +75,18 @@ class DriveInterface:
             event_callbacks=SubscriptionEventCallbacks(use_default_callbacks=False))
         self.encoder_odometry = config.odometry_source == ODOMETRY_SOURCE_ENCODER
         self.odom_pub = self.joint_states_pub = None
-        self._publishers = {}
-        self._watches = {}
+        self._publishers = {}  # stream -> (publish(now), SubscriberWatch of its topic)
         quiet = PublisherEventCallbacks(use_default_callbacks=False)
         if config.publish_odom:
             self.odom_pub = node.create_publisher(Odometry, odom_topic, 10,
                                                   event_callbacks=quiet)
-            self._publishers[ODOMETRY_STREAM] = self.publish_odometry
-            self._watches[ODOMETRY_STREAM] = SubscriberWatch(self.odom_pub)
+            self._publishers[ODOMETRY_STREAM] = (self.publish_odometry,
+                                                 SubscriberWatch(self.odom_pub))
         if publishes_joint_states(plugin):
             self.joint_states_pub = node.create_publisher(JointState, joint_states_topic, 10,
                                                           event_callbacks=quiet)
-            self._publishers[JOINT_STATES_STREAM] = self.publish_joint_states
-            self._watches[JOINT_STATES_STREAM] = SubscriberWatch(self.joint_states_pub)
+            self._publishers[JOINT_STATES_STREAM] = (self.publish_joint_states,
+                                                     SubscriberWatch(self.joint_states_pub))
         # Filled in and published again every time: publish() copies the message.
         self.odom_msg = Odometry()
         if config.covariance is not None:
@@ -102,9 +101,9 @@ class DriveInterface:
         if stream == ODOMETRY_STREAM and self.encoder_odometry:
             # One arc per odometry period, whether anyone listens or not.
             self.drive.integrate_encoders()
-        publish = self._publishers.get(stream)
+        publish, watch = self._publishers.get(stream, (None, None))
         # Nobody would receive it: skip the message, the costly part.
-        if publish is not None and self._watches[stream].listened():
+        if publish is not None and watch.listened():
             publish(now)
 
     def publish_odometry(self, now):

@@ -182,9 +182,8 @@ class Pacer:
                 (self._wall_clock() - start) / steps - self.step_wall_time)
 
     def steps_to_next_due(self, now, other_due=math.inf, *, limit):
-        """Return the steps until a stream (or other_due) falls due, 1 to limit."""
-        due = min((self._next_sim[name] for name in self._state_streams), default=math.inf)
-        due = min(due, other_due)
+        """Return the steps until a stream of state (or other_due) falls due, 1 to limit."""
+        due = min([self._next_sim[name] for name in self._state_streams] + [other_due])
         # Half a step of slack, as in take_due().
         steps = (due - now) / self.timestep - 0.5
         if steps >= limit:  # also when nothing is due at all
@@ -231,7 +230,7 @@ class Pacer:
             else:
                 due.append((name, now))
                 self.published(name, now)
-        return sorted(due, key=lambda turn: turn[1])
+        return sorted(due, key=lambda item: item[1])  # stable: streams keep their order
 
     def published(self, name, now):
         """Schedule a stream's next turn after it was published at simulation time now."""

@@ -4,9 +4,9 @@ The ROS faces of the sensor plugins: sensor_msgs LaserScan, Image with CameraInf
 A face makes its sensor active while one of its topics has a subscriber, and publishes each
 reading the sensor hands it, stamped with the simulation time of the reading: nothing is
 measured or built for a topic nobody listens to. It looks for subscribers a few times per wall
-second, when the world node has it look (at most every FACE_LOOK_PERIOD), rather than through
-matched events: each event handler is one more entity every executor turn waits on, and with
-four per robot a fleet of 50 ran a quarter slower.
+second (subscribers.py), when the world node has it look (at most every FACE_LOOK_PERIOD),
+rather than through matched events: each event handler is one more entity every executor turn
+waits on, and with four per robot a fleet of 50 ran a quarter slower.
 Free-running (real_time_factor 0), a sensor is also held to its rate in wall time, as the
 world node holds every stream: far faster than real time, a 5 Hz laser would otherwise cast
 and publish hundreds of scans per wall second. Topics land where gazebo_ros puts them
@@ -28,7 +28,7 @@ from service_tutorial.sim.plugins.imu_sensor import is_ros1_block as is_ros1_imu
 from service_tutorial.sim.plugins.ray_sensor import RaySensor
 from service_tutorial.sim.validation import quoted
 from service_tutorial.sim.validation import WorldError
-from service_tutorial.subscribers import SUBSCRIBER_CHECK_PERIOD
+from service_tutorial.subscribers import SubscriberWatch
 
 # The one type a laser publishes here; gazebo_ros_ray_sensor can also give point clouds.
 LASER_SCAN_TYPE = 'sensor_msgs/LaserScan'
@@ -57,9 +57,8 @@ class SensorFace:
         """Start with no topics; subclasses make theirs with publisher()."""
         self.node = node
         self.sensor = sensor
-        self.publishers = []
+        self.watch = SubscriberWatch()  # the sensor's publishers
         self.listened = False
-        self.next_check = 0.0  # wall time of the next look for subscribers
         self.resume_at = math.inf  # wall time at which a sensor held free-running measures again
         self.next_look = 0.0  # wall time at which look() has something to do
         sensor.listener = self.reading_callback
@@ -70,20 +69,16 @@ class SensorFace:
         publisher = self.node.create_publisher(
             msg_type, topic, depth,
             event_callbacks=PublisherEventCallbacks(use_default_callbacks=False))
-        self.publishers.append(publisher)
+        self.watch.add(publisher)
         return publisher
 
     def look(self, wall_time):
         """Switch the sensor on or off as its topics have subscribers, or a hold ends."""
-        changed = False
-        if wall_time >= self.next_check:
-            self.next_check = wall_time + SUBSCRIBER_CHECK_PERIOD
-            listened = any(publisher.get_subscription_count() > 0
-                           for publisher in self.publishers)
-            changed, self.listened = listened != self.listened, listened
+        listened = self.watch.listened()
+        changed, self.listened = listened != self.listened, listened
         if wall_time >= self.resume_at:
             self.resume_at, changed = math.inf, True
-        self.next_look = min(self.next_check, self.resume_at)
+        self.next_look = min(self.watch.next_look, self.resume_at)
         if changed:
             self._switch()
 
@@ -97,7 +92,7 @@ class SensorFace:
         if node.has_parameter('real_time_factor') and \
                 node.get_parameter('real_time_factor').value <= 0.0:
             self.resume_at = time.monotonic() + sensor.period
-            self.next_look = min(self.next_check, self.resume_at)
+            self.next_look = min(self.watch.next_look, self.resume_at)
             self._switch()
 
     def publish_reading(self, sensor):
@@ -108,9 +103,9 @@ class SensorFace:
         """Stop the sensor and remove its topics from the node."""
         self.sensor.listener = None
         self.sensor.set_active(False)
-        for publisher in self.publishers:
+        for publisher in self.watch.publishers:
             self.node.destroy_publisher(publisher)
-        self.publishers = []
+        self.watch = SubscriberWatch()
 
 
 class LaserScanFace(SensorFace):

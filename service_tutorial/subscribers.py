@@ -15,19 +15,24 @@ SUBSCRIBER_CHECK_PERIOD = 0.2  # s of wall time between two looks for subscriber
 
 
 class SubscriberWatch:
-    """Tells whether a publisher has subscribers, asking again every SUBSCRIBER_CHECK_PERIOD."""
+    """Tells whether one of its publishers has subscribers; asks every SUBSCRIBER_CHECK_PERIOD."""
 
-    def __init__(self, publisher, *, wall_clock=time.monotonic):
-        """Watch an rclpy publisher; the first question asks at once."""
-        self.publisher = publisher
+    def __init__(self, *publishers, wall_clock=time.monotonic):
+        """Watch rclpy publishers (add() watches more); the first question asks at once."""
+        self.publishers = list(publishers)
+        self.next_look = -math.inf  # wall time at which listened() asks again
         self._wall_clock = wall_clock
-        self._next_look = -math.inf
         self._listened = False
 
+    def add(self, publisher):
+        """Watch one more publisher, from the next question on."""
+        self.publishers.append(publisher)
+
     def listened(self):
-        """Tell whether the publisher had a subscriber when last asked."""
+        """Tell whether a publisher had a subscriber when last asked."""
         wall = self._wall_clock()
-        if wall >= self._next_look:
-            self._next_look = wall + SUBSCRIBER_CHECK_PERIOD
-            self._listened = self.publisher.get_subscription_count() > 0
+        if wall >= self.next_look:
+            self.next_look = wall + SUBSCRIBER_CHECK_PERIOD
+            self._listened = any(publisher.get_subscription_count() > 0
+                                 for publisher in self.publishers)
         return self._listened

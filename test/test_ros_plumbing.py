@@ -50,3 +50,14 @@ def test_commands_taken_at_tick_never_reach_the_executor_and_keep_their_order(ro
     assert [msg.linear.x for msg in taken] == [0.1, 0.2, 0.3]
     assert served == []
     assert take_messages(subscription) == []
+
+
+def test_a_watch_of_several_publishers_sees_a_subscriber_on_any_of_them():
+    image, info = CountingPublisher(), CountingPublisher()
+    wall = [0.0]
+    watch = SubscriberWatch(image, wall_clock=lambda: wall[0])
+    watch.add(info)
+    assert not watch.listened()
+    info.subscribers = 1
+    wall[0] += SUBSCRIBER_CHECK_PERIOD
+    assert watch.listened() and watch.next_look == wall[0] + SUBSCRIBER_CHECK_PERIOD

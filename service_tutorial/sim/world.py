@@ -336,7 +336,7 @@ class World:
         self._next_event = plugins.next_event(self._models.values())
 
     def schedule_event(self, time):
-        """Update plugins by simulation time time too: cheaper than schedule_events()."""
+        """Have plugins updated by simulation time `time` at the latest, rescanning none."""
         self._next_event = min(self._next_event, time)  # later: one update() finds nothing
 
     def _update_plugins(self):
