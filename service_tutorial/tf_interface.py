@@ -37,7 +37,11 @@ class TransformBatch:
 
     def __init__(self, node):
         """Make the /tf publisher on node."""
-        self.tf_pub = node.create_publisher(TFMessage, '/tf', TF_QOS)
+        # As for every topic of the world's models: rclpy's default event handlers would add
+        # two waitables to every executor turn, and a turn comes every tick.
+        self.tf_pub = node.create_publisher(
+            TFMessage, '/tf', TF_QOS,
+            event_callbacks=PublisherEventCallbacks(use_default_callbacks=False))
         self._watch = SubscriberWatch(self.tf_pub)
         self._tf_msg = TFMessage()
         self._transforms = []
