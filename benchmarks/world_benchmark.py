@@ -520,13 +520,18 @@ def core_round_trips(models_present, calls, *, with_reset=True):
     return {'spawn': spawns, 'delete': deletes, 'reset_world': resets}
 
 
-def node_round_trips(observer, models_present, calls, *, with_reset=True):
+def node_round_trips(observer, models_present, calls, *, with_reset=True, core=None):
     """
     Time the world node's services from a client in this process.
 
     The world node runs in real time (its default) with models_present tinybots, on one
     executor thread together with a trivial Trigger service. It logs at its default level; the
     console lines go to a file (see quiet_console).
+
+    With core (a ROS-free World holding the same models), each round also times the same
+    spawn and delete on it, and a Trigger call, next to the service calls: the figures that are
+    compared then see the same load on a shared machine. The node's world is paused while the
+    core works, so that its ticks do not take turns with the core on the interpreter.
     """
     from rclpy.executors import SingleThreadedExecutor
     from rclpy.parameter import Parameter
@@ -543,31 +548,51 @@ def node_round_trips(observer, models_present, calls, *, with_reset=True):
     executor.add_node(trivial.node)
     thread = threading.Thread(target=executor.spin, daemon=True)
     thread.start()
+    urdf = read_model('r2d2')
     try:
         for srv_type, name in ((SpawnModel, '/mujoco/spawn_urdf_model'),
                                (DeleteModel, '/mujoco/delete_model'),
                                (Empty, '/mujoco/reset_world'),
+                               (Empty, '/mujoco/pause_physics'),
+                               (Empty, '/mujoco/unpause_physics'),
                                (Trigger, '/benchmark_trivial/trigger')):
             observer.wait_for_service(srv_type, name)
-        spawns, deletes = [], []
+        result = {'spawn': [], 'delete': [], 'core spawn': [], 'core delete': [],
+                  'trigger': []}
         for index in range(calls + 3):  # the first three warm up
-            spawn = observer.timed_calls(SpawnModel, '/mujoco/spawn_urdf_model', spawn_request,
-                                         1, check=lambda r: r.success)
-            delete = observer.timed_calls(
+            samples = {}
+            if core is not None:
+                observer.call(Empty, '/mujoco/pause_physics', Empty.Request())
+                start = time.perf_counter()
+                core.spawn_urdf('r2d2', urdf, position=LESSON_POSITION,
+                                orientation=LESSON_ORIENTATION)
+                middle = time.perf_counter()
+                core.delete_model('r2d2')
+                samples['core spawn'] = [middle - start]
+                samples['core delete'] = [time.perf_counter() - middle]
+                observer.call(Empty, '/mujoco/unpause_physics', Empty.Request())
+            samples['spawn'] = observer.timed_calls(
+                SpawnModel, '/mujoco/spawn_urdf_model', spawn_request, 1,
+                check=lambda r: r.success)
+            samples['delete'] = observer.timed_calls(
                 DeleteModel, '/mujoco/delete_model',
                 lambda _: DeleteModel.Request(model_name='r2d2'), 1,
                 check=lambda r: r.success)
+            if core is not None:
+                samples['trigger'] = observer.timed_calls(
+                    Trigger, '/benchmark_trivial/trigger', lambda _: Trigger.Request(), 1,
+                    check=lambda r: r.success)
             if index >= 3:
-                spawns += spawn
-                deletes += delete
-        result = {'spawn': spawns, 'delete': deletes}
+                for key, values in samples.items():
+                    result[key] += values
         if with_reset:
             observer.call(SpawnModel, '/mujoco/spawn_urdf_model', spawn_request(0))
             result['reset_world'] = observer.timed_calls(
                 Empty, '/mujoco/reset_world', lambda _: Empty.Request(), calls)
-        result['trigger'] = observer.timed_calls(
-            Trigger, '/benchmark_trivial/trigger', lambda _: Trigger.Request(), calls,
-            check=lambda r: r.success)
+        if core is None:
+            result['trigger'] = observer.timed_calls(
+                Trigger, '/benchmark_trivial/trigger', lambda _: Trigger.Request(), calls,
+                check=lambda r: r.success)
         return result
     finally:
         executor.shutdown(timeout_sec=5.0)
@@ -624,11 +649,11 @@ def growth_table(observer, config):
         ('delete p50', '.2f'), ('core delete p50', '.2f'), ('Trigger p50', '.2f'),
         ('spawn limit', '.2f'), ('within', ''), ('delete limit', '.2f'), ('delete within', '')])
     for count in config.growth_counts:
-        core = core_round_trips(count, config.growth_calls, with_reset=False)
         with quiet_console(config.log_path):
-            node = node_round_trips(observer, count, config.growth_calls, with_reset=False)
-        spawn_p50, core_spawn_p50 = median_ms(node['spawn']), median_ms(core['spawn'])
-        delete_p50, core_delete_p50 = median_ms(node['delete']), median_ms(core['delete'])
+            node = node_round_trips(observer, count, config.growth_calls, with_reset=False,
+                                    core=core_fleet(count, driving=False))
+        spawn_p50, core_spawn_p50 = median_ms(node['spawn']), median_ms(node['core spawn'])
+        delete_p50, core_delete_p50 = median_ms(node['delete']), median_ms(node['core delete'])
         trivial_p50 = median_ms(node['trigger'])
         spawn_limit = core_spawn_p50 + 2.0 * trivial_p50
         delete_limit = core_delete_p50 + 2.0 * trivial_p50
@@ -637,7 +662,9 @@ def growth_table(observer, config):
                            delete_limit, delete_p50 <= delete_limit])
     table.note = ('every spawn recompiles the whole model, so its cost grows with the world; '
                   'limit = core p50 + 2 x Trigger p50 (the service may cost two trivial round '
-                  'trips more than the same operation on World)')
+                  'trips more than the same operation on World). Each round times the core '
+                  'spawn and delete (a ROS-free World with the same models, the node\'s world '
+                  'paused meanwhile), then the service spawn and delete, then one Trigger')
     return table
 
 
