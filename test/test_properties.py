@@ -14,7 +14,7 @@ from hypothesis import HealthCheck, settings
 from hypothesis import strategies as st
 import numpy as np
 from service_tutorial.sim.plugins.diff_drive import MAX_WHEEL_RIM_SPEED
-from service_tutorial.sim.validation import WorldError
+from service_tutorial.sim.validation import bounded, WorldError
 from service_tutorial.sim.world import World
 
 TINYBOT = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), 'models',
@@ -222,3 +222,14 @@ def test_any_set_state_and_command_leaves_the_world_finite(moves):
             assert rim <= MAX_WHEEL_RIM_SPEED * (1.0 + 1e-12)
         world.step(50)
         assert_sound(world)
+
+
+@PROPERTY_SETTINGS
+@given(st.lists(st.one_of(st.floats(allow_nan=True, allow_infinity=True),
+                          st.floats(min_value=-2e5, max_value=2e5)), max_size=500),
+       st.sampled_from([1e5, 1e8, 1e10]))
+def test_a_state_check_agrees_with_looking_at_every_value(values, limit):
+    """Whether a state is sane does not depend on the sum of squares that settles most."""
+    array = np.array(values, dtype=float)
+    every_value = all(math.isfinite(value) and abs(value) < limit for value in values)
+    assert bounded(array, limit) == every_value
