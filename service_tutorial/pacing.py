@@ -41,7 +41,7 @@ TIME_ONLY_STREAMS = (CLOCK_STREAM,)
 STEP_BUDGET = 0.005
 EXECUTOR_SHARE = 40.0
 MAX_STEP_BUDGET = 0.05
-REAL_TIME_SHARE = 40.0
+REAL_TIME_SHARE = 60.0
 REAL_TIME_PERIOD = 0.002
 MAX_REAL_TIME_PERIOD = 0.02
 # At most this much simulated time per tick: a command waits for the next tick, so a tick of

@@ -190,13 +190,13 @@ def test_tick_periods_follow_the_executor_turn():
         cpu.now += seconds
         pacer.start_tick()
     for _ in range(200):
-        turn(0.00025)  # 0.25 ms between ticks: ticks every 40 turns, 10 ms
+        turn(0.00025)  # 0.25 ms between ticks: ticks every 60 turns, 15 ms
     assert pacer.executor_turn == pytest.approx(0.00025)
-    assert pacer.tick_period_ns(paused=False) == 10_000_000
+    assert pacer.tick_period_ns(paused=False) == 15_000_000
     turn(0.5)  # a slow service call is not overhead: the estimate barely moves
     assert pacer.executor_turn < 0.0003
     for _ in range(200):
-        turn(0.003)  # 40 turns would be 120 ms
+        turn(0.003)  # 60 turns would be 180 ms
     assert pacer.tick_period_ns(paused=False) == 20_000_000, 'at most 20 ms'
     # Five times real time, a tick steps no more than 20 ms of simulated time either.
     pacer.set_real_time_factor(5.0, world.time)
