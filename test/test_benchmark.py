@@ -25,7 +25,8 @@ EXPECTED_ROWS = {
     'startup': 1,
     'turning': len(QUICK.durations) * len(QUICK.velocities),
     'targets': (1 + 2 * len(QUICK.growth_counts) + 6 * len(QUICK.cost_counts) + 1
-                + 3 * len(QUICK.robot_counts) + 1 + 1),
+                + 2 * len(QUICK.robot_counts)
+                + (world_benchmark.CPU_TARGET_ROBOTS in QUICK.robot_counts) + 1 + 1),
     'core': 2,
     # cold spawn, warm spawn and delete of two robots per world size, and the box sequence
     'spawn_cost': 6 * len(QUICK.cost_counts) + 1,
