@@ -15,7 +15,7 @@ a budget of wall time, and each stream is also held to its rate in wall time, so
 ends chunks: far faster than real time, the simulated rates would cost more than the physics.
 
 The executor's turn between two ticks costs CPU time that grows with the node's topics (about
-0.6 ms with 50 robots), so ticks are spaced to keep it a small share of the time. Free-running,
+0.4 ms with 50 robots in real time), so ticks are spaced to keep it a small share of the time. Free-running,
 a tick steps EXECUTOR_SHARE times as long as a turn (STEP_BUDGET to MAX_STEP_BUDGET); in real
 time, ticks come every REAL_TIME_SHARE turns (REAL_TIME_PERIOD to MAX_REAL_TIME_PERIOD, and
 no more than MAX_TICK_SIMULATED of simulated time apart); paused, there is nothing to step and
