@@ -15,12 +15,12 @@ a budget of wall time, and each stream is also held to its rate in wall time, so
 ends chunks: far faster than real time, the simulated rates would cost more than the physics.
 
 The executor's turn between two ticks costs CPU time that grows with the node's topics (about
-0.4 ms with 50 robots in real time), so ticks are spaced to keep it a small share of the time. Free-running,
-a tick steps EXECUTOR_SHARE times as long as a turn (STEP_BUDGET to MAX_STEP_BUDGET); in real
-time, ticks come every REAL_TIME_SHARE turns (REAL_TIME_PERIOD to MAX_REAL_TIME_PERIOD, and
-no more than MAX_TICK_SIMULATED of simulated time apart); paused, there is nothing to step and
-ticks come every PAUSED_TICK_PERIOD, and /clock is said again every PAUSED_CLOCK_PERIOD of wall
-time (repeat_due), so that a late joiner learns the time.
+0.4 ms with 50 robots in real time), so ticks are spaced to keep it a small share of the time.
+Free-running, a tick steps EXECUTOR_SHARE times as long as a turn (STEP_BUDGET to
+MAX_STEP_BUDGET); in real time, ticks come every REAL_TIME_SHARE turns (REAL_TIME_PERIOD to
+MAX_REAL_TIME_PERIOD, and no more than MAX_TICK_SIMULATED of simulated time apart); paused,
+there is nothing to step and ticks come every PAUSED_TICK_PERIOD, and /clock is said again
+every PAUSED_CLOCK_PERIOD of wall time (repeat_due), so that a late joiner learns the time.
 
 While a spawn or a delete keeps the world busy, simulation time stands still (hold), as in
 Gazebo; the world does not run fast afterwards to make up for it.
