@@ -777,47 +777,46 @@ class FleetWorld:
         self.close()
 
 
-def free_running_rounds(observer, count, config):
+def alternating_windows(observer, count, real_time_factor, window, config):
     """
-    Alternate windows of bare mj_step (world paused) and of the free-running world node.
+    Alternate windows of bare mj_step (world paused) and of the world node, round by round.
 
-    Adjacent windows see the same load on a shared machine; each figure is a median.
+    Adjacent windows see the same load on a shared machine. Yield bare mj_step's RawFleet.window
+    figures and the world's FleetWorld.window figures of each round.
     """
     raw = RawFleet(count)
-    rounds = []
-    with FleetWorld(observer, count, 0.0) as world:
+    with FleetWorld(observer, count, real_time_factor) as world:
         world.fleet.drive_for(config.warm_up)
         for _ in range(config.speed_rounds):
             world.physics('pause_physics')
-            raw_speed, raw_cpu = raw.window(config.speed_window)
+            raw_figures = raw.window(config.speed_window)
             world.physics('unpause_physics')
             world.fleet.drive_for(config.speed_settle)
-            node_speed, node_cpu, clock_rate, odom_rate = world.window(config.speed_window)
-            rounds.append((node_speed, raw_speed, node_speed / raw_speed, node_cpu / raw_cpu,
-                           clock_rate, odom_rate))
+            yield raw_figures, world.window(window)
+
+
+def free_running_rounds(observer, count, config):
+    """Return the free-running world node's figures against bare mj_step, medians of rounds."""
+    rounds = []
+    for (raw_speed, raw_cpu), (node_speed, node_cpu, clock_rate, odom_rate) in \
+            alternating_windows(observer, count, 0.0, config.speed_window, config):
+        rounds.append((node_speed, raw_speed, node_speed / raw_speed, node_cpu / raw_cpu,
+                       clock_rate, odom_rate))
     return [statistics.median(column) for column in zip(*rounds)]
 
 
 def real_time_rounds(observer, count, config):
     """
-    Alternate windows of bare mj_step (world paused) and of the world node in real time.
+    Return the world node's figures in real time against bare mj_step, medians of rounds.
 
-    Return the medians of the achieved factor, the world's CPU share (%), the CPU share bare
-    mj_step of the same fleet needs for real time (%), and the /clock and odom rates.
+    They are the achieved factor, the world's CPU share (%), the CPU share bare mj_step of the
+    same fleet needs for real time (%), and the /clock and odom rates.
     """
-    raw = RawFleet(count)
     rounds = []
-    with FleetWorld(observer, count, 1.0) as world:
-        world.fleet.drive_for(config.warm_up)
-        for _ in range(config.speed_rounds):
-            world.physics('pause_physics')
-            _, raw_per_cpu_second = raw.window(config.speed_window)
-            world.physics('unpause_physics')
-            world.fleet.drive_for(config.speed_settle)
-            factor, per_cpu_second, clock_rate, odom_rate = world.window(
-                config.real_time_window)
-            rounds.append((factor, 100.0 * factor / per_cpu_second,
-                           100.0 / raw_per_cpu_second, clock_rate, odom_rate))
+    for (_, raw_per_cpu_second), (factor, per_cpu_second, clock_rate, odom_rate) in \
+            alternating_windows(observer, count, 1.0, config.real_time_window, config):
+        rounds.append((factor, 100.0 * factor / per_cpu_second, 100.0 / raw_per_cpu_second,
+                       clock_rate, odom_rate))
     return [statistics.median(column) for column in zip(*rounds)]
 
 
