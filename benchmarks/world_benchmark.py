@@ -534,8 +534,8 @@ def node_round_trips(observer, models_present, calls, *, with_reset=True, core=N
     executor thread together with a trivial Trigger service. It logs at its default level; the
     console lines go to a file (see quiet_console).
 
-    With core (a ROS-free World holding the same models), each round also times the same
-    spawn and delete on it, and a Trigger call, next to the service calls: the figures that are
+    Each round times a spawn, a delete and a Trigger call. With core (a ROS-free World holding
+    the same models), it first times the same spawn and delete on core: the figures that are
     compared then see the same load on a shared machine. The node's world is paused while the
     core works, so that its ticks do not take turns with the core on the interpreter.
     """
@@ -584,10 +584,9 @@ def node_round_trips(observer, models_present, calls, *, with_reset=True, core=N
                 DeleteModel, '/mujoco/delete_model',
                 lambda _: DeleteModel.Request(model_name='r2d2'), 1,
                 check=lambda r: r.success)
-            if core is not None:
-                samples['trigger'] = observer.timed_calls(
-                    Trigger, '/benchmark_trivial/trigger', lambda _: Trigger.Request(), 1,
-                    check=lambda r: r.success)
+            samples['trigger'] = observer.timed_calls(
+                Trigger, '/benchmark_trivial/trigger', lambda _: Trigger.Request(), 1,
+                check=lambda r: r.success)
             if index >= 3:
                 for key, values in samples.items():
                     result[key] += values
@@ -595,10 +594,6 @@ def node_round_trips(observer, models_present, calls, *, with_reset=True, core=N
             observer.call(SpawnModel, '/mujoco/spawn_urdf_model', spawn_request(0))
             result['reset_world'] = observer.timed_calls(
                 Empty, '/mujoco/reset_world', lambda _: Empty.Request(), calls)
-        if core is None:
-            result['trigger'] = observer.timed_calls(
-                Trigger, '/benchmark_trivial/trigger', lambda _: Trigger.Request(), calls,
-                check=lambda r: r.success)
         return result
     finally:
         executor.shutdown(timeout_sec=5.0)
