@@ -24,17 +24,19 @@ setup(
     tests_require=['pytest'],
     entry_points={
         'console_scripts': [
-            'mujoco_world = service_tutorial.mujoco_world:main',
-            'robot_turning_server = service_tutorial.robot_turning_server:main',
-            'robot_turning_client = service_tutorial.robot_turning_client:main',
-            'robot_turning_action_server = service_tutorial.robot_turning_action_server:main',
-            'robot_turning_action_client = service_tutorial.robot_turning_action_client:main',
-            'spawn_model_client = service_tutorial.spawn_model_client:main',
-            'delete_model_client = service_tutorial.delete_model_client:main',
-            'reset_simulation_client = service_tutorial.reset_simulation_client:main',
-            'turning_demo = service_tutorial.turning_demo:main',
-            'save_snapshot = service_tutorial.save_snapshot:main',
-            'sensor_pictures = service_tutorial.sensor_pictures:main',
+            'mujoco_world = service_tutorial.world_node.node:main',
+            'robot_turning_server = service_tutorial.lesson.robot_turning_server:main',
+            'robot_turning_client = service_tutorial.lesson.robot_turning_client:main',
+            ('robot_turning_action_server = '
+             'service_tutorial.lesson.robot_turning_action_server:main'),
+            ('robot_turning_action_client = '
+             'service_tutorial.lesson.robot_turning_action_client:main'),
+            'spawn_model_client = service_tutorial.lesson.spawn_model_client:main',
+            'delete_model_client = service_tutorial.lesson.delete_model_client:main',
+            'reset_simulation_client = service_tutorial.lesson.reset_simulation_client:main',
+            'turning_demo = service_tutorial.pictures.turning_demo:main',
+            'save_snapshot = service_tutorial.pictures.save_snapshot:main',
+            'sensor_pictures = service_tutorial.pictures.sensor_pictures:main',
         ],
     },
 )

@@ -541,7 +541,7 @@ def node_round_trips(observer, models_present, calls, *, with_reset=True, core=N
     """
     from rclpy.executors import SingleThreadedExecutor
     from rclpy.parameter import Parameter
-    from service_tutorial.mujoco_world import MujocoWorld
+    from service_tutorial.world_node.node import MujocoWorld
     from srv_interfaces.srv import DeleteModel, SpawnModel
     from std_srvs.srv import Empty, Trigger
 
@@ -897,7 +897,7 @@ def startup_table(observer, config):
     imports = []
     for _ in range(max(1, min(3, config.startup_runs))):
         start = time.monotonic()
-        subprocess.run([sys.executable, '-c', 'import service_tutorial.mujoco_world'],
+        subprocess.run([sys.executable, '-c', 'import service_tutorial.world_node.node'],
                        check=True)
         imports.append(time.monotonic() - start)
     table = Table('startup', 'Start-up: mujoco_world process start to every /mujoco/ service '
@@ -908,7 +908,7 @@ def startup_table(observer, config):
     table.rows.append([len(times), p50, max(times), statistics.median(cpu_times),
                        statistics.median(imports), 1.5, p50 < 1.5])
     table.note = ('CPU s: CPU time the world process had used when ready; imports alone: wall '
-                  'time of a fresh interpreter importing service_tutorial.mujoco_world (rclpy, '
+                  'time of a fresh interpreter importing service_tutorial.world_node.node (rclpy, '
                   'MuJoCo, yourdfpy and trimesh), the floor of any start-up')
     return table
 
@@ -1250,8 +1250,8 @@ def answers_table(observer, config):
     """Time how soon a missing service is reported and a turn without turning answered."""
     from rclpy.executors import SingleThreadedExecutor
     from rclpy.node import Node
-    from service_tutorial.model_services import delete_model, ServiceUnavailableError
-    from service_tutorial.robot_turning_server import RobotTurningServer
+    from service_tutorial.lesson.model_services import delete_model, ServiceUnavailableError
+    from service_tutorial.lesson.robot_turning_server import RobotTurningServer
     from srv_interfaces.srv import ControlTurningMessage
     table = Table('answers', 'Answers that need no simulation (s)', [
         ('call', ''), ('took', '.3f'), ('limit', '.1f'), ('within', '')])

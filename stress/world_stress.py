@@ -52,7 +52,7 @@ def world_command(real_time_factor):
     """Return the command line that starts the world node as users start it."""
     executable = shutil.which('mujoco_world')
     command = [executable] if executable else [sys.executable, '-m',
-                                               'service_tutorial.mujoco_world']
+                                               'service_tutorial.world_node.node']
     return command + ['--ros-args', '-p', f'real_time_factor:={real_time_factor}',
                       '--log-level', 'warn']
 

@@ -10,7 +10,7 @@ from rclpy.parameter import Parameter
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import CameraInfo, Image
 from service_tutorial.conversions import seconds_of as seconds
-from service_tutorial.mujoco_world import MujocoWorld
+from service_tutorial.world_node.node import MujocoWorld
 from std_srvs.srv import Trigger
 
 pytestmark = pytest.mark.ros

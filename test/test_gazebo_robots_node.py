@@ -21,8 +21,8 @@ from rcl_interfaces.msg import Log
 from rclpy.parameter import Parameter
 from sensor_msgs.msg import JointState
 from service_tutorial.conversions import seconds_of as seconds, yaw_of
-from service_tutorial.mujoco_world import left_out_of
-from service_tutorial.spawn_model_client import split_xacro_arguments
+from service_tutorial.lesson.spawn_model_client import split_xacro_arguments
+from service_tutorial.world_node.node import left_out_of
 import test_world_node
 from test_world_node import lesson_pose, WorldClient
 

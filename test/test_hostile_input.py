@@ -21,9 +21,9 @@ import pytest
 from rclpy.parameter import Parameter
 from rosgraph_msgs.msg import Clock
 from service_tutorial.conversions import fill_pose_msg, fill_twist_msg, seconds_of, yaw_of
-from service_tutorial.mujoco_world import MujocoWorld
-from service_tutorial.robot_turning_server import RobotTurningServer
+from service_tutorial.lesson.robot_turning_server import RobotTurningServer
 from service_tutorial.sim.plugins.diff_drive import MAX_WHEEL_RIM_SPEED
+from service_tutorial.world_node.node import MujocoWorld
 from srv_interfaces.srv import ControlTurningMessage, DeleteModel, GetModelList, GetModelState
 from srv_interfaces.srv import SetModelState, SpawnModel
 from std_srvs.srv import Empty

@@ -88,7 +88,8 @@ def test_the_import_walk_finds_ros_wherever_it_is_imported():
     assert sorted(module for module in modules if is_ros_side(module)) == sorted([
         'sensor_msgs.msg.Image', 'rclpy.node', 'ament_index_python',
         'service_tutorial.conversions'])
-    assert not is_ros_side('service_tutorial.sim') and is_ros_side('service_tutorial.pacing')
+    assert not is_ros_side('service_tutorial.sim')
+    assert is_ros_side('service_tutorial.world_node.pacing')
     for module in ('std_srvs.srv', 'srv_interfaces.srv', 'rcl_interfaces.msg',
                    'launch_ros.actions', 'builtin_interfaces.msg', 'rosgraph_msgs.msg'):
         assert is_ros(module), module

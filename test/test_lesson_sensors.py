@@ -17,7 +17,7 @@ from rclpy.parameter import Parameter
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import CameraInfo, Image, Imu, LaserScan
 from service_tutorial.conversions import seconds_of as seconds
-from service_tutorial.mujoco_world import MujocoWorld
+from service_tutorial.world_node.node import MujocoWorld
 from srv_interfaces.srv import DeleteModel, SpawnModel
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))

@@ -10,10 +10,10 @@ import pytest
 from rclpy.node import Node
 from rosgraph_msgs.msg import Clock
 from service_tutorial.conversions import make_pose, yaw_of
-from service_tutorial.model_services import delete_model, get_model_state, model_path
-from service_tutorial.model_services import reset_simulation, response_text
-from service_tutorial.model_services import ServiceUnavailableError, spawn_model
-from service_tutorial.mujoco_world import MujocoWorld
+from service_tutorial.lesson.model_services import delete_model, get_model_state, model_path
+from service_tutorial.lesson.model_services import reset_simulation, response_text
+from service_tutorial.lesson.model_services import ServiceUnavailableError, spawn_model
+from service_tutorial.world_node.node import MujocoWorld
 from srv_interfaces.srv import GetModelList, SpawnModel
 from std_srvs.srv import Empty
 

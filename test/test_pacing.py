@@ -3,8 +3,8 @@
 import math
 
 import pytest
-from service_tutorial import pacing
-from service_tutorial.pacing import Pacer
+from service_tutorial.world_node import pacing
+from service_tutorial.world_node.pacing import Pacer
 
 TIMESTEP = 0.002
 RATES = {'clock': 250.0, 'odom': 50.0}  # Hz of simulation time: every 2 and every 10 steps

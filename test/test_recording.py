@@ -11,7 +11,7 @@ import pytest
 from rclpy.node import Node
 from sensor_msgs.msg import Image
 from service_tutorial.conversions import time_msg as stamp
-from service_tutorial.recording import image_pixels, TurnRecorder
+from service_tutorial.pictures.recording import image_pixels, TurnRecorder
 
 pytestmark = pytest.mark.ros
 

@@ -10,10 +10,10 @@ import mujoco
 import numpy as np
 from PIL import Image, ImageSequence
 import pytest
-from service_tutorial.image_files import write_animation, write_png
+from service_tutorial.pictures.image_files import write_animation, write_png
+from service_tutorial.pictures.trajectory_plot import write_trajectory_plot
 from service_tutorial.sim.rendering import SceneCamera
 from service_tutorial.sim.world import World
-from service_tutorial.trajectory_plot import write_trajectory_plot
 import yaml
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))

@@ -3,9 +3,9 @@
 import types
 
 import pytest
-from service_tutorial.ros_names import normalise_namespace, plugin_topic, topic_prefix
 from service_tutorial.sim.urdf.gazebo import PluginBlock
 from service_tutorial.sim.validation import WorldError
+from service_tutorial.world_node.ros_names import normalise_namespace, plugin_topic, topic_prefix
 
 
 def test_namespaces_are_normalised():

@@ -2,8 +2,8 @@
 
 from geometry_msgs.msg import Twist, Vector3
 from rclpy.node import Node
-from service_tutorial.subscribers import SUBSCRIBER_CHECK_PERIOD, SubscriberWatch
-from service_tutorial.taken_at_tick import take_messages, TakenAtTick
+from service_tutorial.world_node.subscribers import SUBSCRIBER_CHECK_PERIOD, SubscriberWatch
+from service_tutorial.world_node.taken_at_tick import take_messages, TakenAtTick
 
 
 class CountingPublisher:

@@ -2,7 +2,7 @@
 
 import numpy as np
 from PIL import Image
-from service_tutorial.sensor_pictures import main, SCAN_COLOUR
+from service_tutorial.pictures.sensor_pictures import main, SCAN_COLOUR
 
 
 def test_sensor_pictures_writes_the_scan_from_above_and_a_camera_frame(tmp_path, capsys):

@@ -11,9 +11,9 @@ from rclpy.parameter import Parameter
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import CameraInfo, Image, Imu, LaserScan
 from service_tutorial.conversions import seconds_of as seconds
-from service_tutorial.mujoco_world import MujocoWorld
 from service_tutorial.sim.plugins.camera_sensor import CameraSensor
 from service_tutorial.sim.plugins.ray_sensor import RaySensor
+from service_tutorial.world_node.node import MujocoWorld
 from srv_interfaces.srv import GetModelList, SpawnModel
 
 pytestmark = pytest.mark.ros

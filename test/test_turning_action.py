@@ -13,9 +13,9 @@ from rcl_interfaces.srv import DescribeParameters, SetParameters
 from rclpy.action import ActionClient
 from rclpy.parameter import Parameter
 from service_tutorial.conversions import seconds_of, yaw_of
-from service_tutorial.model_services import call
-from service_tutorial.mujoco_world import MujocoWorld
-from service_tutorial.robot_turning_action_server import RobotTurningActionServer
+from service_tutorial.lesson.model_services import call
+from service_tutorial.lesson.robot_turning_action_server import RobotTurningActionServer
+from service_tutorial.world_node.node import MujocoWorld
 from srv_interfaces.action import TurnRobot
 from srv_interfaces.srv import GetModelState
 

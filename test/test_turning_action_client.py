@@ -10,13 +10,13 @@ from ament_index_python.packages import get_package_prefix
 from geometry_msgs.msg import Twist
 import pytest
 from rclpy.parameter import Parameter
-from service_tutorial.robot_turning_action_client import ANGLE_PROMPT, ANGLE_TOO_LARGE
-from service_tutorial.robot_turning_action_client import ask_turning_goal, parse_arguments
-from service_tutorial.robot_turning_action_client import parse_turning_goal
-from service_tutorial.robot_turning_action_client import VELOCITY_NOT_POSITIVE
-from service_tutorial.robot_turning_action_server import RobotTurningActionServer
-from service_tutorial.robot_turning_client import NOT_A_NUMBER, TurningInputError
-from service_tutorial.robot_turning_client import VELOCITY_PROMPT, VELOCITY_TOO_HIGH
+from service_tutorial.lesson.robot_turning_action_client import ANGLE_PROMPT, ANGLE_TOO_LARGE
+from service_tutorial.lesson.robot_turning_action_client import ask_turning_goal, parse_arguments
+from service_tutorial.lesson.robot_turning_action_client import parse_turning_goal
+from service_tutorial.lesson.robot_turning_action_client import VELOCITY_NOT_POSITIVE
+from service_tutorial.lesson.robot_turning_action_server import RobotTurningActionServer
+from service_tutorial.lesson.turning_limits import NOT_A_NUMBER, TurningInputError
+from service_tutorial.lesson.turning_limits import VELOCITY_PROMPT, VELOCITY_TOO_HIGH
 from test_turning_action import ActionWorld, GroundTruth
 
 CLIENT = os.path.join(get_package_prefix('service_tutorial'), 'lib', 'service_tutorial',

@@ -6,12 +6,12 @@ import subprocess
 from ament_index_python.packages import get_package_prefix
 from geometry_msgs.msg import Twist
 import pytest
-from service_tutorial.robot_turning_client import ask_turning_request, DURATION_PROMPT
-from service_tutorial.robot_turning_client import DURATION_NOT_WHOLE, NOT_A_NUMBER
-from service_tutorial.robot_turning_client import parse_arguments, parse_turning_request
-from service_tutorial.robot_turning_client import TurningInputError, VELOCITY_PROMPT
-from service_tutorial.robot_turning_client import VELOCITY_TOO_HIGH
-from service_tutorial.robot_turning_server import RobotTurningServer
+from service_tutorial.lesson.robot_turning_client import parse_arguments
+from service_tutorial.lesson.robot_turning_server import RobotTurningServer
+from service_tutorial.lesson.turning_limits import ask_turning_request, DURATION_NOT_WHOLE
+from service_tutorial.lesson.turning_limits import DURATION_PROMPT, NOT_A_NUMBER
+from service_tutorial.lesson.turning_limits import parse_turning_request, TurningInputError
+from service_tutorial.lesson.turning_limits import VELOCITY_PROMPT, VELOCITY_TOO_HIGH
 
 CLIENT = os.path.join(get_package_prefix('service_tutorial'), 'lib', 'service_tutorial',
                       'robot_turning_client')

@@ -7,9 +7,9 @@ import pytest
 from rcl_interfaces.srv import GetParameters
 from rclpy.parameter import Parameter
 from service_tutorial.conversions import yaw_of
-from service_tutorial.model_services import call
-from service_tutorial.mujoco_world import MujocoWorld
-from service_tutorial.robot_turning_server import RobotTurningServer
+from service_tutorial.lesson.model_services import call
+from service_tutorial.lesson.robot_turning_server import RobotTurningServer
+from service_tutorial.world_node.node import MujocoWorld
 from srv_interfaces.srv import ControlTurningMessage, GetModelState
 
 pytestmark = pytest.mark.ros

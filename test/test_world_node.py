@@ -11,8 +11,8 @@ from rclpy.parameter import Parameter
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState
 from service_tutorial.conversions import seconds_of as seconds, yaw_of
-from service_tutorial.mujoco_world import MujocoWorld
 from service_tutorial.sim.world import World
+from service_tutorial.world_node.node import MujocoWorld
 from srv_interfaces.srv import DeleteModel, GetModelList, GetModelState, SetModelState
 from srv_interfaces.srv import SpawnModel
 from std_srvs.srv import Empty

@@ -19,8 +19,8 @@ from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState
 from service_tutorial.conversions import seconds_of
-from service_tutorial.log_forwarding import RclpyHandler
-from service_tutorial.mujoco_world import MujocoWorld
+from service_tutorial.world_node.log_forwarding import RclpyHandler
+from service_tutorial.world_node.node import MujocoWorld
 from srv_interfaces.srv import DeleteModel, SpawnModel
 from std_msgs.msg import String
 from std_srvs.srv import Empty

@@ -24,8 +24,8 @@ from rclpy.parameter import Parameter
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import CameraInfo, Image
 from service_tutorial.conversions import seconds_of
-from service_tutorial.mujoco_world import MujocoWorld
-from service_tutorial.world_parameters import WORLD_PARAMETERS
+from service_tutorial.world_node.node import MujocoWorld
+from service_tutorial.world_node.parameters import WORLD_PARAMETERS
 from srv_interfaces.srv import GetModelList, GetModelState
 from std_srvs.srv import Empty, Trigger
 from test_world_parameters import OUT_OF_RANGE, WRONG_TYPE
@@ -45,7 +45,8 @@ PARALLEL_PROCESSES = 4
 def world_command():
     """Return the command line that starts the installed world node, as `ros2 run` does."""
     executable = shutil.which('mujoco_world')
-    return [executable] if executable else [sys.executable, '-m', 'service_tutorial.mujoco_world']
+    return [executable] if executable else [
+        sys.executable, '-m', 'service_tutorial.world_node.node']
 
 
 def run_world(argument):

@@ -12,8 +12,8 @@ from rcl_interfaces.msg import Parameter as ParameterMsg, ParameterType, Paramet
 from rcl_interfaces.srv import DescribeParameters, GetParameters, SetParameters
 from rclpy.node import Node
 from rclpy.parameter import Parameter
-from service_tutorial.world_parameters import declare_world_parameters, default_parameters
-from service_tutorial.world_parameters import ParameterError, run_or_exit
+from service_tutorial.world_node.parameters import declare_world_parameters, default_parameters
+from service_tutorial.world_node.parameters import ParameterError, run_or_exit
 import yaml
 
 pytestmark = pytest.mark.ros
@@ -334,7 +334,7 @@ NODE_PROGRAM = textwrap.dedent("""\
 
     import rclpy
     from rclpy.node import Node
-    from service_tutorial.world_parameters import declare_world_parameters, run_or_exit
+    from service_tutorial.world_node.parameters import declare_world_parameters, run_or_exit
 
 
     def main():

@@ -15,7 +15,7 @@ import sys
 from ament_index_python.packages import get_package_share_directory
 import numpy as np
 from PIL import Image, ImageDraw
-from service_tutorial.image_files import write_png
+from service_tutorial.pictures.image_files import write_png
 from service_tutorial.sim.plugins.camera_sensor import CameraSensor
 from service_tutorial.sim.plugins.ray_sensor import RaySensor
 from service_tutorial.sim.rendering import SceneCamera

@@ -18,9 +18,9 @@ from geometry_msgs.msg import TransformStamped
 from rclpy.event_handler import PublisherEventCallbacks
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from service_tutorial.conversions import fill_time_msg, fill_transform_msg
-from service_tutorial.pacing import ODOMETRY_STREAM
-from service_tutorial.ros_names import topic_prefix
-from service_tutorial.subscribers import SubscriberWatch
+from service_tutorial.world_node.pacing import ODOMETRY_STREAM
+from service_tutorial.world_node.ros_names import topic_prefix
+from service_tutorial.world_node.subscribers import SubscriberWatch
 from std_msgs.msg import String
 from tf2_msgs.msg import TFMessage
 

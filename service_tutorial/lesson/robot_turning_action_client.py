@@ -20,13 +20,12 @@ from rclpy.action import ActionClient
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.signals import SignalHandlerOptions
-from service_tutorial.client_main import program_arguments
-from service_tutorial.model_services import response_text
-from service_tutorial.robot_turning_action_server import MAX_ANGLE
-from service_tutorial.robot_turning_client import ask_turning_request, MAX_ANGULAR_VEL
-from service_tutorial.robot_turning_client import NOT_A_NUMBER, parse_pair_or_nothing
-from service_tutorial.robot_turning_client import TurningInputError, VELOCITY_PROMPT
-from service_tutorial.robot_turning_client import VELOCITY_TOO_HIGH
+from service_tutorial.lesson.client_main import program_arguments
+from service_tutorial.lesson.model_services import response_text
+from service_tutorial.lesson.turning_limits import ask_turning_request, MAX_ANGLE
+from service_tutorial.lesson.turning_limits import MAX_ANGULAR_VEL, NOT_A_NUMBER
+from service_tutorial.lesson.turning_limits import parse_pair_or_nothing, TurningInputError
+from service_tutorial.lesson.turning_limits import VELOCITY_PROMPT, VELOCITY_TOO_HIGH
 from srv_interfaces.action import TurnRobot
 
 ANGLE_PROMPT = '> Type turning angle: '

@@ -9,8 +9,8 @@ import sys
 
 from rclpy.node import Node
 
-from service_tutorial.client_main import parse_client_arguments, program_arguments, run_node
-from service_tutorial.model_services import reset_simulation
+from service_tutorial.lesson.client_main import parse_client_arguments, program_arguments, run_node
+from service_tutorial.lesson.model_services import reset_simulation
 
 
 def parse_arguments(argv):

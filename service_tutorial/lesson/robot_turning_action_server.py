@@ -23,13 +23,12 @@ from rclpy.action import ActionServer, CancelResponse, GoalResponse
 from rclpy.duration import Duration
 from rclpy.node import Node
 from rclpy.task import Future
-from service_tutorial.client_main import spin_node
 from service_tutorial.conversions import yaw_of
-from service_tutorial.robot_turning_server import MAX_ANGULAR_VEL
+from service_tutorial.lesson.client_main import spin_node
+from service_tutorial.lesson.turning_limits import MAX_ANGLE, MAX_ANGULAR_VEL
 from srv_interfaces.action import TurnRobot
 
 # Ten turns, in rad.
-MAX_ANGLE = 20.0 * math.pi
 # Below this yaw rate, in rad/s, the robot counts as at rest after it was told to stop.
 AT_REST = 0.01
 # Longest wait for the robot to come to rest after it was told to stop, in s.

@@ -27,15 +27,18 @@ from rclpy.action import ActionClient
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.signals import SignalHandlerOptions
-from service_tutorial import model_services
-from service_tutorial.client_main import program_arguments
 from service_tutorial.conversions import make_pose, seconds_of, yaw_of
-from service_tutorial.model_services import response_text
-from service_tutorial.recording import TurnRecorder
-from service_tutorial.robot_turning_action_client import STATUS_NAMES
+from service_tutorial.lesson import model_services
+from service_tutorial.lesson.client_main import program_arguments
+from service_tutorial.lesson.model_services import response_text
+from service_tutorial.pictures.recording import TurnRecorder
 from srv_interfaces.action import TurnRobot
 from srv_interfaces.srv import ControlTurningMessage, DeleteModel, GetModelState, SpawnModel
 from std_srvs.srv import Empty
+
+# How the demo prints an action's final status, as the action client does.
+STATUS_NAMES = {getattr(GoalStatus, name): name[len('STATUS_'):]
+                for name in dir(GoalStatus) if name.startswith('STATUS_')}
 
 PACKAGE = 'service_tutorial'
 ROBOT = 'tinybot'

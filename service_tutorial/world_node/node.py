@@ -18,25 +18,27 @@ import os
 import time
 
 from ament_index_python.packages import get_package_share_directory
+import rclpy
 from rclpy.clock import Clock as WallClock, ClockType
 from rclpy.event_handler import PublisherEventCallbacks
+from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from rosgraph_msgs.msg import Clock
-from service_tutorial.camera_stream import CAMERA_PARAMETERS, CameraStream
-from service_tutorial.client_main import spin_node
 from service_tutorial.conversions import fill_pose_msg, fill_time_msg, fill_twist_msg
 from service_tutorial.conversions import pose_from_msg, time_msg, twist_from_msg
 from service_tutorial.conversions import yaw_quaternion
-from service_tutorial.log_forwarding import forward_core_logs
-from service_tutorial.model_interface import ModelInterface
-from service_tutorial.pacing import CLOCK_STREAM, JOINT_STATES_STREAM, ODOMETRY_STREAM, Pacer
 from service_tutorial.robot_files import file_model_name, read_robot_file
-from service_tutorial.ros_names import normalise_namespace
 from service_tutorial.sim.validation import WorldError
-from service_tutorial.tf_interface import RobotDescriptionPublisher, TransformBatch
-from service_tutorial.world_parameters import declare_world_parameters, run_or_exit
+from service_tutorial.world_node.camera_stream import CAMERA_PARAMETERS, CameraStream
+from service_tutorial.world_node.log_forwarding import forward_core_logs
+from service_tutorial.world_node.model_interface import ModelInterface
+from service_tutorial.world_node.pacing import CLOCK_STREAM, JOINT_STATES_STREAM
+from service_tutorial.world_node.pacing import ODOMETRY_STREAM, Pacer
+from service_tutorial.world_node.parameters import declare_world_parameters, run_or_exit
+from service_tutorial.world_node.ros_names import normalise_namespace
+from service_tutorial.world_node.tf_publishing import RobotDescriptionPublisher, TransformBatch
 from srv_interfaces.srv import DeleteModel, GetModelList, GetModelState, SetModelState
 from srv_interfaces.srv import SpawnModel
 from std_srvs.srv import Empty
@@ -417,7 +419,17 @@ class MujocoWorld(Node):
 
 def main(args=None):
     """Run the MuJoCo world until Ctrl-C; a bad parameter ends it with one line, status 2."""
-    return run_or_exit(spin_node, MujocoWorld, args=args)
+    rclpy.init(args=args)
+    world = None
+    try:
+        world = run_or_exit(MujocoWorld)
+        rclpy.spin(world)
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+    finally:
+        if world is not None:
+            world.destroy_node()
+        rclpy.try_shutdown()
 
 
 if __name__ == '__main__':

@@ -15,8 +15,8 @@ from nav_msgs.msg import Odometry
 import numpy as np
 from sensor_msgs.msg import Image
 from service_tutorial.conversions import seconds_of, yaw_of
-from service_tutorial.image_files import write_animation
-from service_tutorial.trajectory_plot import write_trajectory_plot
+from service_tutorial.pictures.image_files import write_animation
+from service_tutorial.pictures.trajectory_plot import write_trajectory_plot
 
 ANIMATION_FILE = 'turning.gif'
 TRAJECTORY_FILE = 'trajectory.svg'

@@ -18,11 +18,9 @@ from rcl_interfaces.msg import ParameterDescriptor
 from rclpy.callback_groups import ReentrantCallbackGroup
 from rclpy.node import Node
 from rclpy.task import Future
-from service_tutorial.client_main import spin_node
+from service_tutorial.lesson.client_main import spin_node
+from service_tutorial.lesson.turning_limits import MAX_ANGULAR_VEL
 from srv_interfaces.srv import ControlTurningMessage
-
-# pi / 2: the fastest turn the lesson allows, in rad/s.
-MAX_ANGULAR_VEL = 1.5707
 
 
 class Turn:

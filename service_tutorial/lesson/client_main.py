@@ -13,7 +13,7 @@ import sys
 import rclpy
 from rclpy.executors import ExternalShutdownException
 from rclpy.utilities import remove_ros_args
-from service_tutorial.model_services import DEFAULT_TIMEOUT
+from service_tutorial.lesson.model_services import DEFAULT_TIMEOUT
 
 
 def program_arguments(args=None):

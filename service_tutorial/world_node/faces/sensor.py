@@ -21,14 +21,14 @@ import time
 from rclpy.event_handler import PublisherEventCallbacks
 from sensor_msgs.msg import CameraInfo, Image, Imu, LaserScan
 from service_tutorial.conversions import fill_quaternion_msg, fill_time_msg
-from service_tutorial.ros_names import plugin_topic
 from service_tutorial.sim.plugins.camera_sensor import CameraSensor
 from service_tutorial.sim.plugins.imu_sensor import ImuSensor
 from service_tutorial.sim.plugins.imu_sensor import is_ros1_block as is_ros1_imu
 from service_tutorial.sim.plugins.ray_sensor import RaySensor
 from service_tutorial.sim.validation import quoted
 from service_tutorial.sim.validation import WorldError
-from service_tutorial.subscribers import SubscriberWatch
+from service_tutorial.world_node.ros_names import plugin_topic
+from service_tutorial.world_node.subscribers import SubscriberWatch
 
 # The one type a laser publishes here; gazebo_ros_ray_sensor can also give point clouds.
 LASER_SCAN_TYPE = 'sensor_msgs/LaserScan'

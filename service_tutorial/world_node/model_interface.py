@@ -19,17 +19,17 @@ from nav_msgs.msg import Odometry
 from rclpy.event_handler import PublisherEventCallbacks, SubscriptionEventCallbacks
 from sensor_msgs.msg import JointState
 from service_tutorial.conversions import fill_pose_msg, fill_time_msg, fill_twist_msg
-from service_tutorial.pacing import JOINT_STATES_STREAM, ODOMETRY_STREAM
-from service_tutorial.ros_names import plugin_topic
-from service_tutorial.sensor_interfaces import SENSOR_INTERFACES
 from service_tutorial.sim.plugins.diff_drive import DiffDrive, MAX_WHEEL_RIM_SPEED
 from service_tutorial.sim.plugins.drive_config import is_ros1_block
 from service_tutorial.sim.plugins.drive_config import ODOMETRY_SOURCE_ENCODER
 from service_tutorial.sim.validation import finite_number
 from service_tutorial.sim.validation import WorldError
-from service_tutorial.subscribers import SubscriberWatch
-from service_tutorial.taken_at_tick import take_messages, TakenAtTick
-from service_tutorial.tf_interface import OdomTfInterface
+from service_tutorial.world_node.faces.sensor import SENSOR_INTERFACES
+from service_tutorial.world_node.pacing import JOINT_STATES_STREAM, ODOMETRY_STREAM
+from service_tutorial.world_node.ros_names import plugin_topic
+from service_tutorial.world_node.subscribers import SubscriberWatch
+from service_tutorial.world_node.taken_at_tick import take_messages, TakenAtTick
+from service_tutorial.world_node.tf_publishing import OdomTfInterface
 
 
 def publishes_joint_states(drive):

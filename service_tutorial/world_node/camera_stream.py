@@ -16,11 +16,11 @@ a new size, pose or field of view makes a new camera (its renderer again made on
 import math
 import os
 
+import PIL.Image
 from sensor_msgs.msg import CameraInfo, Image
 from service_tutorial.conversions import time_msg
-from service_tutorial.image_files import write_png
 from service_tutorial.sim.rendering import SceneCamera
-from service_tutorial.subscribers import SubscriberWatch
+from service_tutorial.world_node.subscribers import SubscriberWatch
 from std_srvs.srv import Trigger
 
 CAMERA_FRAME = 'camera_optical_frame'  # z forward, x right, y down (REP 103, optical frames)
@@ -145,7 +145,8 @@ class CameraStream:
         path = os.path.join(self.snapshot_directory, f'snapshot_t{now:010.3f}.png')
         try:
             os.makedirs(self.snapshot_directory, exist_ok=True)
-            write_png(path, self.camera.render(self.world.model, self.world.data))
+            PIL.Image.fromarray(self.camera.render(self.world.model, self.world.data)).save(
+                path, format='PNG')
         except Exception as error:  # no GL, a full disk: an answer, never a crashed world
             response.success = False
             response.message = f'could not save a snapshot to {path}: {error}'

@@ -1,0 +1,71 @@
+"""
+The lesson's turning limits, and what its clients say when a typed value breaks one.
+
+The turning service and action, and the clients that prompt for them, share these: the top
+angular velocity of the lesson (1.5707 rad/s), the largest angle the action turns, the
+prompts and refusals the lesson's client printed, and the parsing that applies them.
+"""
+
+import math
+
+MAX_ANGULAR_VEL = 1.5707  # rad/s, the lesson's own limit
+MAX_ANGLE = 20.0 * math.pi  # rad, ten turns either way
+MAX_UINT32 = 2**32 - 1
+DURATION_PROMPT = '> Type turning time duration: '
+VELOCITY_PROMPT = '> Type turning angular velocity: '
+NOT_A_NUMBER = 'Not a number type number plz !!'
+VELOCITY_TOO_HIGH = 'Velocity too high !!'
+DURATION_NOT_WHOLE = 'Duration must be a whole number of seconds, 0 or more !!'
+
+
+class TurningInputError(ValueError):
+    """A typed duration or velocity that cannot go into the request."""
+
+
+def parse_turning_request(duration_text, velocity_text, *, max_angular_vel=MAX_ANGULAR_VEL):
+    """Turn the typed duration and velocity into (time_duration, angular_vel) or raise."""
+    try:
+        duration = float(duration_text)
+        velocity = float(velocity_text)
+    except ValueError:
+        raise TurningInputError(NOT_A_NUMBER) from None
+    if not (math.isfinite(duration) and math.isfinite(velocity)):
+        raise TurningInputError(NOT_A_NUMBER)
+    if duration < 0 or duration != int(duration) or duration > MAX_UINT32:
+        raise TurningInputError(DURATION_NOT_WHOLE)
+    if abs(velocity) > max_angular_vel:
+        raise TurningInputError(VELOCITY_TOO_HIGH)
+    return int(duration), velocity
+
+
+def ask_turning_request(logger, *, read=input, prompts=(DURATION_PROMPT, VELOCITY_PROMPT),
+                        parse=parse_turning_request):
+    """Prompt for two values (duration, velocity) until parse takes them; EOFError at the end."""
+    while True:
+        first_text = read(prompts[0])
+        velocity_text = read(prompts[1])
+        try:
+            return parse(first_text, velocity_text)
+        except TurningInputError as error:
+            logger.error(str(error))
+
+
+def parse_pair_or_nothing(argv, parser, names, parse, result):
+    """
+    Read the two positionals names through parse() into options.<result>, None if not given.
+
+    The lesson's clients take both numbers on the command line or prompt for them; a bad
+    pair ends the program with argparse's usage line and the reason.
+    """
+    first, second = names
+    options = parser.parse_args(argv)
+    values = (getattr(options, first), getattr(options, second))
+    if (values[0] is None) != (values[1] is None):
+        parser.error(f'give both {first} and {second}, or neither to be prompted')
+    setattr(options, result, None)
+    if values[0] is not None:
+        try:
+            setattr(options, result, parse(*values))
+        except TurningInputError as error:
+            parser.error(str(error))
+    return options
