@@ -5,6 +5,7 @@ import os
 
 import numpy as np
 import pytest
+from service_tutorial.sim.description import UrdfError
 from service_tutorial.sim.plugins.diff_drive import DiffDrive
 from service_tutorial.sim.plugins.diff_drive import MAX_WHEEL_RIM_SPEED
 from service_tutorial.sim.plugins.diff_drive import Odometry
@@ -12,7 +13,6 @@ from service_tutorial.sim.plugins.drive_config import ODOMETRY_SOURCE_ENCODER
 from service_tutorial.sim.plugins.drive_config import ODOMETRY_SOURCE_WORLD
 from service_tutorial.sim.plugins.skid_steer import SkidSteer
 from service_tutorial.sim.urdf.builder import load_urdf
-from service_tutorial.sim.urdf.hardened_xml import UrdfError
 from service_tutorial.sim.validation import WorldError
 from service_tutorial.sim.world import World
 

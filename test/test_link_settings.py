@@ -6,9 +6,9 @@ import os
 
 import numpy as np
 import pytest
+from service_tutorial.sim.description import UrdfError
 from service_tutorial.sim.urdf import builder
 from service_tutorial.sim.urdf.builder import load_urdf
-from service_tutorial.sim.urdf.hardened_xml import UrdfError
 from service_tutorial.sim.world import World
 
 LINKBOT = os.path.join(os.path.dirname(os.path.abspath(__file__)), 'models', 'linkbot.urdf')

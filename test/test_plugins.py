@@ -4,13 +4,13 @@ import os
 
 import pytest
 from service_tutorial.sim import plugins
+from service_tutorial.sim.description import UrdfError
 from service_tutorial.sim.plugins import Plugin
 from service_tutorial.sim.plugins.diff_drive import DiffDrive
 from service_tutorial.sim.plugins.drive_config import parameter
 from service_tutorial.sim.urdf.builder import load_urdf
 from service_tutorial.sim.urdf.gazebo import read_plugin_blocks
 from service_tutorial.sim.urdf.hardened_xml import parse_model_xml
-from service_tutorial.sim.urdf.hardened_xml import UrdfError
 from service_tutorial.sim.validation import WorldError
 from service_tutorial.sim.world import World
 

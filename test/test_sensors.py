@@ -6,11 +6,11 @@ import os
 import numpy as np
 import pytest
 from service_tutorial.sim import plugins
+from service_tutorial.sim.description import UrdfError
 from service_tutorial.sim.plugins.camera_sensor import CameraSensor
 from service_tutorial.sim.plugins.imu_sensor import ImuSensor
 from service_tutorial.sim.plugins.ray_sensor import RaySensor
 from service_tutorial.sim.urdf.builder import load_urdf
-from service_tutorial.sim.urdf.hardened_xml import UrdfError
 from service_tutorial.sim.validation import WorldError
 from service_tutorial.sim.world import World
 

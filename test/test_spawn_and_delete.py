@@ -5,8 +5,8 @@ import shutil
 
 import mujoco
 import pytest
+from service_tutorial.sim.description import UrdfError
 from service_tutorial.sim.description_cache import DescriptionCache
-from service_tutorial.sim.urdf.hardened_xml import UrdfError
 from service_tutorial.sim.validation import WorldError
 from service_tutorial.sim.world import World
 

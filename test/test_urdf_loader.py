@@ -6,6 +6,7 @@ import os
 import mujoco
 import numpy as np
 import pytest
+from service_tutorial.sim.description import UrdfError
 from service_tutorial.sim.plugins import diff_drive
 from service_tutorial.sim.plugins import drive_config
 from service_tutorial.sim.plugins.drive_config import ODOMETRY_SOURCE_ENCODER
@@ -13,7 +14,6 @@ from service_tutorial.sim.plugins.drive_config import ODOMETRY_SOURCE_WORLD
 from service_tutorial.sim.urdf import builder
 from service_tutorial.sim.urdf import hardened_xml
 from service_tutorial.sim.urdf.builder import load_urdf
-from service_tutorial.sim.urdf.hardened_xml import UrdfError
 from service_tutorial.sim.validation import WorldError
 from service_tutorial.sim.world import World
 

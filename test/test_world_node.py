@@ -282,7 +282,7 @@ def test_every_model_gets_a_ros_interface_under_its_namespace(fast_world):
                 | {subscription.topic_name for subscription in node.subscriptions})
     tiny_topics = {'/robots/tiny/cmd_vel', '/robots/tiny/odom', '/robots/tiny/joint_states'}
     assert tiny_topics | {'/cmd_vel', '/odom', '/joint_states'} <= topics()
-    assert not node.models['r2d2'].plugins, 'R2-D2 has no plugin with a ROS face'
+    assert not node.models['r2d2'].faces, 'R2-D2 has no plugin with a ROS face'
     assert fast_world.delete('tiny').success
     assert list(node.models) == ['tinybot', 'r2d2']
     assert not tiny_topics & topics()

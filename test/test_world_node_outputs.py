@@ -167,9 +167,9 @@ def test_a_drive_whose_block_says_no_sends_no_tf(ros):
     quiet = read_model('tinybot').replace('<publish_odom_tf>true</publish_odom_tf>',
                                           '<publish_odom_tf>false</publish_odom_tf>')
     spawn(ros, 'quiet', quiet, namespace='quiet', x=2.0)
-    assert [type(plugin).__name__ for plugin in world.models['quiet'].plugins] == [
-        'DriveInterface', 'LaserScanInterface', 'CameraInterface', 'ImuInterface']
-    assert 'OdomTfInterface' in [type(p).__name__ for p in world.models['tinybot'].plugins]
+    assert [type(face).__name__ for face in world.models['quiet'].faces] == [
+        'DriveFace', 'LaserScanFace', 'CameraFace', 'ImuFace']
+    assert 'OdomTfFace' in [type(p).__name__ for p in world.models['tinybot'].faces]
 
 
 def test_robot_description_reaches_a_subscriber_that_starts_after_the_world(ros):

@@ -11,10 +11,10 @@ import os
 
 from lxml import etree
 import mujoco
+from service_tutorial.sim.description import UrdfError
 from service_tutorial.sim.urdf.builder import load_urdf
 from service_tutorial.sim.urdf.hardened_xml import MAX_MODEL_XML_BYTES
 from service_tutorial.sim.urdf.hardened_xml import parse_xml
-from service_tutorial.sim.urdf.hardened_xml import UrdfError
 from service_tutorial.sim.validation import quoted
 from service_tutorial.sim.validation import WorldError
 

@@ -6,6 +6,7 @@ Models are attached to the live spec and the model is recompiled in place, so sp
 deleting one model leaves the state of every other model exactly as it was.
 """
 
+import functools
 import logging
 import math
 import os
@@ -13,19 +14,19 @@ import types
 
 import mujoco
 import numpy as np
+from service_tutorial.sim import attachment
 from service_tutorial.sim import frames
 from service_tutorial.sim import plugins
 from service_tutorial.sim import scene
 from service_tutorial.sim import validation
+from service_tutorial.sim.description import UrdfError
 from service_tutorial.sim.description_cache import DescriptionCache
 from service_tutorial.sim.frames import ModelState
 from service_tutorial.sim.model import Model
-from service_tutorial.sim.model import STATE_FIELDS
 from service_tutorial.sim.recovery import Recovery
 from service_tutorial.sim.recovery import take_steps
 from service_tutorial.sim.scenery import Scenery
 from service_tutorial.sim.urdf.hardened_xml import MAX_MODEL_XML_BYTES
-from service_tutorial.sim.urdf.hardened_xml import UrdfError
 from service_tutorial.sim.validation import quoted
 from service_tutorial.sim.validation import WorldError
 
@@ -43,42 +44,6 @@ def _route_mujoco_messages():
     config = mujoco.MjLogConfig.get()
     config.logto_file = False
     config.set()
-
-
-def _compile_error(error):
-    """Return a MuJoCo compiler error as one line, without its 'Error: ' prefix."""
-    reason = '; '.join(line.strip() for line in str(error).splitlines() if line.strip())
-    return reason[len('Error: '):] if reason.startswith('Error: ') else reason
-
-
-def _saved_state(models, data):
-    """Return a copy of each model's share of the integration state, by model name."""
-    return {name: model.saved_state(data) for name, model in models.items()}
-
-
-def _restore_state(models, data, saved):
-    """Write saved shares of the integration state back, at the models' current places."""
-    for name, values in saved.items():
-        models[name].restore_state(data, values)
-
-
-def _recompile(spec, mj_model, data, leaving=None):
-    """
-    Recompile an edited spec; return the new model and data, every model's state carried over.
-
-    A model was attached at the end of the spec, or the model leaving was detached. Either way
-    every other model's entries in MuJoCo's state arrays stay in order, so the state before,
-    without the leaving model's share, is the start of each array after. MuJoCo 4 carries all
-    of it over itself; older versions carry positions, velocities and controls only.
-    """
-    if leaving is None:
-        kept = {field: getattr(data, field).copy() for field in STATE_FIELDS}
-    else:
-        kept = leaving.state_without(data)
-    mj_model, data = spec.recompile(mj_model, data)
-    for field, values in kept.items():
-        getattr(data, field)[:len(values)] = values
-    return mj_model, data
 
 
 class World:
@@ -111,9 +76,10 @@ class World:
         self._next_event = math.inf
         self._kinematics_fresh = False
         # What every spec the world builds starts from: physics options, ground, scenery.
-        self._scene = (timestep, gravity,
-                       Scenery(scenery, package_resolver=package_resolver) if scenery else None)
-        self._spec = scene.make_scene(*self._scene)
+        self._make_scene = functools.partial(
+            scene.make_scene, timestep, gravity,
+            Scenery(scenery, package_resolver=package_resolver) if scenery else None)
+        self._spec = self._make_scene()
         self._model = self._spec.compile()
         self._data = mujoco.MjData(self._model)
         self._recovery = Recovery(self)
@@ -203,14 +169,12 @@ class World:
             raise WorldError(str(error)) from None
         model = Model(name, description, world_position, world_orientation)
         try:
-            model.attach(self._spec)
-            mj_model, data = _recompile(self._spec, self._model, self._data)
-        except Exception as error:
+            self._model, self._data = attachment.attach(self._spec, self._model, self._data,
+                                                        model)
+        except attachment.CompileError as error:
             # The live spec still holds the half-attached robot: build it afresh without it.
             self.rebuild(self._models)
-            reason = _compile_error(error)
-            raise WorldError(f"model '{name}' does not compile: {reason}") from None
-        self._model, self._data = mj_model, data
+            raise WorldError(f"model '{name}' does not compile: {error}") from None
         self._models[name] = model
         model.mark_placed()
         self._after_recompile([model])  # the others' elements kept their ids; events follow
@@ -241,11 +205,11 @@ class World:
         """Remove a model; every other model keeps its state."""
         model = self._spawned(name)
         names = list(self._models)
-        model.detach(self._spec)
         del self._models[name]
         try:
-            self._model, self._data = _recompile(self._spec, self._model, self._data, model)
-        except Exception:
+            self._model, self._data = attachment.detach(self._spec, self._model, self._data,
+                                                        model)
+        except attachment.CompileError:
             self.rebuild(self._models)
             return
         # The models spawned after it moved up in MuJoCo's arrays; the others stayed.
@@ -256,17 +220,13 @@ class World:
 
     def rebuild(self, models):
         """Build spec, model and data afresh with just the given models, their state kept."""
-        spec = scene.make_scene(*self._scene)
-        for model in models.values():
-            model.attach(spec)
-        mj_model = spec.compile()
-        data = mujoco.MjData(mj_model)
+        saved = attachment.saved_state(models, self._data)
+        self._spec, self._model, data = attachment.build(self._make_scene(), models)
         data.time = self._data.time
-        saved = _saved_state(models, self._data)
-        self._spec, self._model, self._data, self._models = spec, mj_model, data, models
+        self._data, self._models = data, models
         self._after_recompile(models.values())
         self.schedule_events()
-        _restore_state(self._models, self._data, saved)
+        attachment.restore_state(models, data, saved)
         self.forward()
 
     def _after_recompile(self, moved):

@@ -1,16 +1,17 @@
 """
 The MuJoCo world node: the Gazebo of this tutorial.
 
-It steps a service_tutorial.sim.world.World, serves the world services under /mujoco/ and
-publishes /clock; each model's own topics (cmd_vel, odom and joint_states of a diff drive, its
-odometry on /tf) come from its ModelInterface, made when the model is spawned, and a model with
-topics also gets its URDF on robot_description. A Pacer decides how far each tick steps and
+It steps a service_tutorial.sim.world.World, serves the world services under /mujoco/
+(gazebo_services.py) and publishes /clock; each model's own topics (cmd_vel, odom and
+joint_states of a diff drive, its odometry on /tf) come from the faces of its ModelInterface,
+made when the model is spawned, and a model with topics also gets its URDF on
+robot_description. A Pacer decides how far each tick steps and
 which streams are due. Stepping runs in a timer of the node's single callback group, so a
 service callback, a parameter change and a physics step never run at the same time and no locks
 are needed. Each tick first takes the velocity commands that came since the last one: they
 never wake the executor (taken_at_tick.py).
 
-The parameters are declared in world_parameters.py, and every one that is not read-only takes
+The parameters are declared in parameters.py, and every one that is not read-only takes
 effect as soon as it is set. What the simulation logs reaches the node's logger (and /rosout).
 """
 
@@ -23,15 +24,13 @@ from rclpy.clock import Clock as WallClock, ClockType
 from rclpy.event_handler import PublisherEventCallbacks
 from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
-from rclpy.parameter import Parameter
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from rosgraph_msgs.msg import Clock
-from service_tutorial.conversions import fill_pose_msg, fill_time_msg, fill_twist_msg
-from service_tutorial.conversions import pose_from_msg, time_msg, twist_from_msg
+from service_tutorial.conversions import fill_time_msg
 from service_tutorial.conversions import yaw_quaternion
 from service_tutorial.robot_files import file_model_name, read_robot_file
-from service_tutorial.sim.validation import WorldError
 from service_tutorial.world_node.camera_stream import CAMERA_PARAMETERS, CameraStream
+from service_tutorial.world_node.gazebo_services import GazeboServices
 from service_tutorial.world_node.log_forwarding import forward_core_logs
 from service_tutorial.world_node.model_interface import ModelInterface
 from service_tutorial.world_node.pacing import CLOCK_STREAM, JOINT_STATES_STREAM
@@ -39,9 +38,6 @@ from service_tutorial.world_node.pacing import ODOMETRY_STREAM, Pacer
 from service_tutorial.world_node.parameters import declare_world_parameters, run_or_exit
 from service_tutorial.world_node.ros_names import normalise_namespace
 from service_tutorial.world_node.tf_publishing import RobotDescriptionPublisher, TransformBatch
-from srv_interfaces.srv import DeleteModel, GetModelList, GetModelState, SetModelState
-from srv_interfaces.srv import SpawnModel
-from std_srvs.srv import Empty
 
 PACKAGE = 'service_tutorial'
 # Wall time between two looks of the sensor faces for subscribers and for holds that end, in s.
@@ -129,25 +125,9 @@ class MujocoWorld(Node):
         self.clock_pub = self.create_publisher(
             Clock, '/clock', CLOCK_QOS,
             event_callbacks=PublisherEventCallbacks(use_default_callbacks=False))
-        self.tf_batch = TransformBatch(self)  # /tf, for every model's OdomTfInterface
-        self.spawn_srv = self.create_service(
-            SpawnModel, '~/spawn_urdf_model', self.spawn_model_callback)
-        self.delete_srv = self.create_service(
-            DeleteModel, '~/delete_model', self.delete_model_callback)
-        self.reset_simulation_srv = self.create_service(
-            Empty, '~/reset_simulation', self.reset_simulation_callback)
-        self.reset_world_srv = self.create_service(
-            Empty, '~/reset_world', self.reset_world_callback)
-        self.pause_srv = self.create_service(
-            Empty, '~/pause_physics', self.pause_physics_callback)
-        self.unpause_srv = self.create_service(
-            Empty, '~/unpause_physics', self.unpause_physics_callback)
-        self.model_list_srv = self.create_service(
-            GetModelList, '~/get_model_list', self.get_model_list_callback)
-        self.get_state_srv = self.create_service(
-            GetModelState, '~/get_model_state', self.get_model_state_callback)
-        self.set_state_srv = self.create_service(
-            SetModelState, '~/set_model_state', self.set_model_state_callback)
+        self.tf_batch = TransformBatch(self)  # /tf, for every drive's OdomTfFace
+        # The lesson's world services under ~/ (/mujoco/ by default), as gazebo_ros serves them.
+        self.gazebo_services = GazeboServices(self)
         # ~/camera/image_raw, ~/camera/camera_info (camera_enabled) and ~/save_snapshot.
         self.camera_stream = CameraStream(self, self.world, parameters)
 
@@ -265,7 +245,7 @@ class MujocoWorld(Node):
                                       reference_frame=reference_frame, base_dir=base_dir)
         try:
             self.models[name] = ModelInterface(self, self.world, model, namespace)
-            if self.models[name].plugins:
+            if self.models[name].faces:
                 self.robot_descriptions[name] = RobotDescriptionPublisher(self, namespace, urdf)
         except Exception:
             self._forget_model(name)
@@ -276,65 +256,14 @@ class MujocoWorld(Node):
         # The world's log has already named each of them, with the reason.
         return left_out_of(model.description)
 
-    def _forget_model(self, name):
-        """Destroy the ROS interface of a model that left the world."""
-        for interfaces in (self.models, self.robot_descriptions):
-            interface = interfaces.pop(name, None)
-            if interface is not None:
-                interface.destroy()
+    def delete_model(self, name):
+        """Remove a model from the world along with its ROS interface."""
+        self.world.delete_model(name)
+        self._forget_model(name)
+        if self.viewer is not None:
+            self._open_viewer()
 
-    def spawn_model_callback(self, request, response):
-        """Spawn a URDF model; failures are answered, never raised."""
-        def spawn():
-            position, orientation = pose_from_msg(request.initial_pose)
-            left_out = self.spawn_model(request.model_name, request.model_xml,
-                                        request.robot_namespace, position, orientation,
-                                        request.reference_frame)
-            answer = f'SpawnModel: Successfully spawned entity {request.model_name!r}'
-            return f'{answer} ({left_out})' if left_out else answer
-        return self._answer('SpawnModel', self._holding_time(spawn), response)
-
-    def delete_model_callback(self, request, response):
-        """Delete a model and its topics."""
-        def delete():
-            self.world.delete_model(request.model_name)
-            self._forget_model(request.model_name)
-            if self.viewer is not None:
-                self._open_viewer()
-            return f'DeleteModel: Successfully deleted model {request.model_name!r}'
-        return self._answer('DeleteModel', self._holding_time(delete), response)
-
-    def get_model_list_callback(self, request, response):
-        """List every model in spawn order."""
-        response.model_names = self.world.model_names()
-        response.success = True
-        response.status_message = 'GetModelList: got properties'
-        return response
-
-    def get_model_state_callback(self, request, response):
-        """Report a model's pose and twist in the requested frame."""
-        def get_state():
-            state = self.world.get_model_state(request.model_name, request.reference_frame)
-            response.header.stamp = time_msg(self.world.time)
-            response.header.frame_id = request.reference_frame or 'world'
-            fill_pose_msg(response.pose, state.position, state.orientation)
-            fill_twist_msg(response.twist, state.linear_velocity, state.angular_velocity)
-            return 'GetModelState: got properties'
-        return self._answer('GetModelState', get_state, response)
-
-    def set_model_state_callback(self, request, response):
-        """Move a model to a pose and give it a twist."""
-        def set_state():
-            position, orientation = pose_from_msg(request.pose)
-            linear, angular = twist_from_msg(request.twist)
-            self.world.set_model_state(
-                request.model_name, position=position, orientation=orientation,
-                linear_velocity=linear, angular_velocity=angular,
-                reference_frame=request.reference_frame)
-            return f'SetModelState: set state of {request.model_name!r}'
-        return self._answer('SetModelState', set_state, response)
-
-    def _holding_time(self, operation):
+    def holding_time(self, operation):
         """Return operation, made to hold simulation time for as long as it runs."""
         def held():
             start = time.monotonic()
@@ -345,50 +274,19 @@ class MujocoWorld(Node):
                     self.step_timer.reset()  # the next tick a whole period from now
         return held
 
-    def _answer(self, service, operation, response):
-        """Run a world operation and report its outcome in success and status_message."""
-        try:
-            response.status_message = operation()
-            response.success = True
-        except WorldError as error:
-            response.success = False
-            response.status_message = f'{service}: {error}'
-            self.get_logger().warning(response.status_message)
-        except Exception as error:  # a bug must not take the world down with it
-            response.success = False
-            response.status_message = f'{service}: internal error: {error!r}'
-            self.get_logger().error(response.status_message)
-        return response
+    def _forget_model(self, name):
+        """Destroy the ROS interface of a model that left the world."""
+        for interfaces in (self.models, self.robot_descriptions):
+            interface = interfaces.pop(name, None)
+            if interface is not None:
+                interface.destroy()
 
-    def reset_simulation_callback(self, request, response):
-        """Put every model back at its spawn pose and the clock back to zero."""
-        self.world.reset_simulation()
-        self._after_reset()
-        self.get_logger().info('simulation reset: time 0, every model at its spawn pose')
-        return response
-
-    def reset_world_callback(self, request, response):
-        """Put every model back at its spawn pose; time goes on."""
-        self.world.reset_world()
-        self._after_reset()
-        self.get_logger().info('world reset: every model at its spawn pose')
-        return response
-
-    def _after_reset(self):
+    def after_reset(self):
+        """Start the streams again from the world's time after a reset, and publish it."""
         self.pacer.anchor(self.world.time)
         self.pacer.restart(self.world.time, (ODOMETRY_STREAM, JOINT_STATES_STREAM))
         self.publish_clock()
         self.publish_due()
-
-    def pause_physics_callback(self, request, response):
-        """Stop stepping; services and /clock keep answering. The paused parameter follows."""
-        self.set_parameters([Parameter('paused', Parameter.Type.BOOL, True)])
-        return response
-
-    def unpause_physics_callback(self, request, response):
-        """Resume stepping from where it stopped. The paused parameter follows."""
-        self.set_parameters([Parameter('paused', Parameter.Type.BOOL, False)])
-        return response
 
     # --- viewer -------------------------------------------------------------------------------
 

@@ -12,13 +12,13 @@ import math
 
 import mujoco
 import numpy as np
+from service_tutorial.sim.description import UrdfError
 from service_tutorial.sim.plugins.sensor import Sensor
 from service_tutorial.sim.plugins.sensor import sensor_of
 from service_tutorial.sim.plugins.sensor import SENSOR_SITE_GROUP
 from service_tutorial.sim.plugins.sensor import SensorConfig
 from service_tutorial.sim.rendering import OffscreenCamera
 from service_tutorial.sim.rendering import pinhole_matrix
-from service_tutorial.sim.urdf.hardened_xml import UrdfError
 from service_tutorial.sim.validation import quoted
 
 # From a Gazebo camera's frame (x forward, z up) to MuJoCo's (-z forward, y up), (w, x, y, z).

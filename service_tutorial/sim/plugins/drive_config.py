@@ -10,8 +10,8 @@ values gazebo_ros would have warned about and replaced by its default.
 
 from dataclasses import dataclass
 
-from service_tutorial.sim.urdf.hardened_xml import parse_numbers
-from service_tutorial.sim.urdf.hardened_xml import UrdfError
+from service_tutorial.sim.description import parse_numbers
+from service_tutorial.sim.description import UrdfError
 from service_tutorial.sim.validation import quoted
 
 ODOMETRY_SOURCE_ENCODER = 0

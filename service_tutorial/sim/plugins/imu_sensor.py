@@ -15,13 +15,13 @@ from dataclasses import dataclass
 
 import mujoco
 import numpy as np
+from service_tutorial.sim.description import parse_numbers
+from service_tutorial.sim.description import UrdfError
 from service_tutorial.sim.plugins.sensor import gaussian_noise
 from service_tutorial.sim.plugins.sensor import Sensor
 from service_tutorial.sim.plugins.sensor import sensor_of
 from service_tutorial.sim.plugins.sensor import SENSOR_SITE_GROUP
 from service_tutorial.sim.plugins.sensor import SensorConfig
-from service_tutorial.sim.urdf.hardened_xml import parse_numbers
-from service_tutorial.sim.urdf.hardened_xml import UrdfError
 from service_tutorial.sim.validation import quoted
 
 ROS1_FILENAME = 'gazebo_ros_imu.'

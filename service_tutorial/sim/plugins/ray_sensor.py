@@ -15,13 +15,13 @@ import math
 
 import mujoco
 import numpy as np
+from service_tutorial.sim.description import COLLISION_GROUP
+from service_tutorial.sim.description import UrdfError
 from service_tutorial.sim.plugins.sensor import gaussian_noise
 from service_tutorial.sim.plugins.sensor import Sensor
 from service_tutorial.sim.plugins.sensor import sensor_of
 from service_tutorial.sim.plugins.sensor import SENSOR_SITE_GROUP
 from service_tutorial.sim.plugins.sensor import SensorConfig
-from service_tutorial.sim.urdf.builder import COLLISION_GROUP
-from service_tutorial.sim.urdf.hardened_xml import UrdfError
 from service_tutorial.sim.validation import quoted
 
 _logger = logging.getLogger(__name__)

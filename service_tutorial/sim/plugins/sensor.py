@@ -15,8 +15,8 @@ import zlib
 
 import mujoco
 import numpy as np
+from service_tutorial.sim.description import UrdfError
 from service_tutorial.sim.plugins import Plugin
-from service_tutorial.sim.urdf.hardened_xml import UrdfError
 from service_tutorial.sim.validation import quoted
 
 # Sites of sensors go in a geom group that the renderer does not draw (it draws 0 to 2).

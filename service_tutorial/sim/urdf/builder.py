@@ -15,6 +15,9 @@ import mujoco
 import numpy as np
 from service_tutorial.sim import frames
 from service_tutorial.sim import plugins
+from service_tutorial.sim.description import COLLISION_GROUP, VISUAL_GROUP
+from service_tutorial.sim.description import parse_numbers
+from service_tutorial.sim.description import UrdfError
 from service_tutorial.sim.urdf.gazebo import gazebo_colour
 from service_tutorial.sim.urdf.gazebo import LinkSettings
 from service_tutorial.sim.urdf.gazebo import plugin_filenames
@@ -23,14 +26,10 @@ from service_tutorial.sim.urdf.gazebo import read_plugin_blocks
 from service_tutorial.sim.urdf.gazebo import read_sensor_plugin_blocks
 from service_tutorial.sim.urdf.hardened_xml import check_structure
 from service_tutorial.sim.urdf.hardened_xml import parse_model_xml
-from service_tutorial.sim.urdf.hardened_xml import parse_numbers
-from service_tutorial.sim.urdf.hardened_xml import UrdfError
 from service_tutorial.sim.urdf.meshes import MeshLoader
 import yourdfpy
 
 WORLD_LINK = 'world'
-VISUAL_GROUP = 1
-COLLISION_GROUP = 3
 DEFAULT_VISUAL_RGBA = (0.7, 0.7, 0.7, 1.0)
 COLLISION_RGBA = (0.5, 0.2, 0.2, 0.5)
 # Contact stiffness as a time constant (s). Stiffer than MuJoCo's 0.02 so that a wheel sinks

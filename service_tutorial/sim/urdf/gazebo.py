@@ -13,8 +13,8 @@ import types
 
 import mujoco
 import numpy as np
-from service_tutorial.sim.urdf.hardened_xml import parse_numbers
-from service_tutorial.sim.urdf.hardened_xml import UrdfError
+from service_tutorial.sim.description import parse_numbers
+from service_tutorial.sim.description import UrdfError
 from service_tutorial.sim.validation import quoted
 
 # The flat colours of Gazebo's own materials (gazebo-classic media/materials/scripts/

@@ -5,18 +5,13 @@ Documents with a DOCTYPE are refused, so external entities and entity-expansion 
 reach a parser that would resolve them.
 """
 
-import math
-
 from lxml import etree
+from service_tutorial.sim.description import parse_numbers, UrdfError
 from service_tutorial.sim.validation import quoted
 
 MAX_MODEL_XML_BYTES = 10 * 1024 * 1024
 JOINT_TYPES = ('fixed', 'revolute', 'continuous', 'prismatic', 'floating', 'planar')
 XACRO_NAMESPACE = 'http://www.ros.org/wiki/xacro'
-
-
-class UrdfError(ValueError):
-    """A URDF the loader refuses; the message names the cause and the offending value."""
 
 
 def parse_model_xml(model_xml):
@@ -126,14 +121,3 @@ def check_numbers(element, what):
                 expected = ' or '.join(str(count) for count in counts)
                 raise UrdfError(f'{where} must hold {expected} numbers, not {len(values)}: '
                                 f'{quoted(text)}')
-
-
-def parse_numbers(text, what):
-    """Return the numbers of a whitespace- or comma-separated text; refuse NaN and infinity."""
-    try:
-        values = [float(token) for token in text.replace(',', ' ').split()]
-    except ValueError:
-        raise UrdfError(f'{what} is not a number: {quoted(text)}') from None
-    if not all(math.isfinite(value) for value in values):
-        raise UrdfError(f'{what} contains NaN or infinity: {quoted(text)}')
-    return values

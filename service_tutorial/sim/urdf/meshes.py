@@ -15,8 +15,8 @@ import warnings
 
 import mujoco
 import numpy as np
+from service_tutorial.sim.description import UrdfError
 from service_tutorial.sim.urdf.hardened_xml import parse_xml
-from service_tutorial.sim.urdf.hardened_xml import UrdfError
 
 # File extension -> the trimesh file type that decodes it.
 MESH_FORMATS = {'.stl': 'stl', '.dae': 'dae', '.obj': 'obj'}

@@ -1,0 +1,14 @@
+"""
+The ROS faces of the plugins, one module per kind, mirroring sim/plugins/.
+
+FACES lists every kind of face, in the order a model's topics are made; each meets the
+PluginFace protocol (face.py). A new plugin's face is one module here and one entry below.
+"""
+
+from service_tutorial.world_node.faces.camera import CameraFace
+from service_tutorial.world_node.faces.drive import DriveFace
+from service_tutorial.world_node.faces.imu import ImuFace
+from service_tutorial.world_node.faces.laser import LaserScanFace
+from service_tutorial.world_node.faces.odom_tf import OdomTfFace
+
+FACES = (DriveFace, OdomTfFace, LaserScanFace, CameraFace, ImuFace)

@@ -1,0 +1,130 @@
+"""
+The lesson's world services, as gazebo_ros serves Gazebo's: spawn, delete, reset, pause, state.
+
+They are the world node's services under its private namespace (/mujoco/ by default), with
+srv_interfaces' copies of gazebo_msgs' types. A failure is data in the response (success false
+and a status_message that says what went wrong), never a crashed node; a spawn or delete holds
+simulation time for as long as it takes, so that a real-time world does not jump ahead after it.
+"""
+
+from rclpy.parameter import Parameter
+from service_tutorial.conversions import fill_pose_msg, fill_twist_msg, pose_from_msg
+from service_tutorial.conversions import time_msg, twist_from_msg
+from service_tutorial.sim.validation import WorldError
+from srv_interfaces.srv import DeleteModel, GetModelList, GetModelState, SetModelState
+from srv_interfaces.srv import SpawnModel
+from std_srvs.srv import Empty
+
+
+class GazeboServices:
+    """The /mujoco/ services of the world node (node.MujocoWorld)."""
+
+    def __init__(self, node):
+        """Serve the world of node under node's private namespace."""
+        self.node = node
+        self.world = node.world
+        self.spawn_srv = node.create_service(
+            SpawnModel, '~/spawn_urdf_model', self.spawn_model_callback)
+        self.delete_srv = node.create_service(
+            DeleteModel, '~/delete_model', self.delete_model_callback)
+        self.reset_simulation_srv = node.create_service(
+            Empty, '~/reset_simulation', self.reset_simulation_callback)
+        self.reset_world_srv = node.create_service(
+            Empty, '~/reset_world', self.reset_world_callback)
+        self.pause_srv = node.create_service(
+            Empty, '~/pause_physics', self.pause_physics_callback)
+        self.unpause_srv = node.create_service(
+            Empty, '~/unpause_physics', self.unpause_physics_callback)
+        self.model_list_srv = node.create_service(
+            GetModelList, '~/get_model_list', self.get_model_list_callback)
+        self.get_state_srv = node.create_service(
+            GetModelState, '~/get_model_state', self.get_model_state_callback)
+        self.set_state_srv = node.create_service(
+            SetModelState, '~/set_model_state', self.set_model_state_callback)
+
+    def spawn_model_callback(self, request, response):
+        """Spawn a URDF model; failures are answered, never raised."""
+        def spawn():
+            position, orientation = pose_from_msg(request.initial_pose)
+            left_out = self.node.spawn_model(request.model_name, request.model_xml,
+                                             request.robot_namespace, position, orientation,
+                                             request.reference_frame)
+            answer = f'SpawnModel: Successfully spawned entity {request.model_name!r}'
+            return f'{answer} ({left_out})' if left_out else answer
+        return self._answer('SpawnModel', self.node.holding_time(spawn), response)
+
+    def delete_model_callback(self, request, response):
+        """Delete a model and its topics."""
+        def delete():
+            self.node.delete_model(request.model_name)
+            return f'DeleteModel: Successfully deleted model {request.model_name!r}'
+        return self._answer('DeleteModel', self.node.holding_time(delete), response)
+
+    def get_model_list_callback(self, request, response):
+        """List every model in spawn order."""
+        response.model_names = self.world.model_names()
+        response.success = True
+        response.status_message = 'GetModelList: got properties'
+        return response
+
+    def get_model_state_callback(self, request, response):
+        """Report a model's pose and twist in the requested frame."""
+        def get_state():
+            state = self.world.get_model_state(request.model_name, request.reference_frame)
+            response.header.stamp = time_msg(self.world.time)
+            response.header.frame_id = request.reference_frame or 'world'
+            fill_pose_msg(response.pose, state.position, state.orientation)
+            fill_twist_msg(response.twist, state.linear_velocity, state.angular_velocity)
+            return 'GetModelState: got properties'
+        return self._answer('GetModelState', get_state, response)
+
+    def set_model_state_callback(self, request, response):
+        """Move a model to a pose and give it a twist."""
+        def set_state():
+            position, orientation = pose_from_msg(request.pose)
+            linear, angular = twist_from_msg(request.twist)
+            self.world.set_model_state(
+                request.model_name, position=position, orientation=orientation,
+                linear_velocity=linear, angular_velocity=angular,
+                reference_frame=request.reference_frame)
+            return f'SetModelState: set state of {request.model_name!r}'
+        return self._answer('SetModelState', set_state, response)
+
+    def _answer(self, service, operation, response):
+        """Run a world operation and report its outcome in success and status_message."""
+        try:
+            response.status_message = operation()
+            response.success = True
+        except WorldError as error:
+            response.success = False
+            response.status_message = f'{service}: {error}'
+            self.node.get_logger().warning(response.status_message)
+        except Exception as error:  # a bug must not take the world down with it
+            response.success = False
+            response.status_message = f'{service}: internal error: {error!r}'
+            self.node.get_logger().error(response.status_message)
+        return response
+
+    def reset_simulation_callback(self, request, response):
+        """Put every model back at its spawn pose and the clock back to zero."""
+        self.world.reset_simulation()
+        self.node.after_reset()
+        self.node.get_logger().info('simulation reset: time 0, every model at its spawn pose')
+        return response
+
+    def reset_world_callback(self, request, response):
+        """Put every model back at its spawn pose; time goes on."""
+        self.world.reset_world()
+        self.node.after_reset()
+        self.node.get_logger().info('world reset: every model at its spawn pose')
+        return response
+
+    def pause_physics_callback(self, request, response):
+        """Stop stepping; services and /clock keep answering. The paused parameter follows."""
+        self.node.set_parameters([Parameter('paused', Parameter.Type.BOOL, True)])
+        return response
+
+    def unpause_physics_callback(self, request, response):
+        """Resume stepping from where it stopped. The paused parameter follows."""
+        self.node.set_parameters([Parameter('paused', Parameter.Type.BOOL, False)])
+        return response
