@@ -3,8 +3,8 @@ Pictures of tinybot's sensors in the yard: its scan seen from above, and its cam
 
 No ROS here: a World with the default scenery (models/yard.urdf), tinybot at its start and
 R2-D2 where the lesson drops it; the laser and the camera measure exactly as they do for their
-topics. `sensor_pictures --output docs` writes the README's two PNG files; set MUJOCO_GL=egl
-to render without a display.
+topics. `sensor_pictures --output docs` writes the two PNG files of docs/sensors.md; set
+MUJOCO_GL=egl to render without a display.
 """
 
 import argparse
