@@ -9,7 +9,6 @@ turned) is printed, and the program exits.
 """
 
 import argparse
-import math
 import os
 import sys
 import threading
@@ -22,10 +21,11 @@ from rclpy.node import Node
 from rclpy.signals import SignalHandlerOptions
 from service_tutorial.lesson.client_main import program_arguments
 from service_tutorial.lesson.model_services import response_text
-from service_tutorial.lesson.turning_limits import ask_turning_request, MAX_ANGLE
-from service_tutorial.lesson.turning_limits import MAX_ANGULAR_VEL, NOT_A_NUMBER
+from service_tutorial.lesson.turning_limits import ask_turning_request, given_or_asked
+from service_tutorial.lesson.turning_limits import MAX_ANGLE, MAX_ANGULAR_VEL
 from service_tutorial.lesson.turning_limits import parse_pair_or_nothing, TurningInputError
-from service_tutorial.lesson.turning_limits import VELOCITY_PROMPT, VELOCITY_TOO_HIGH
+from service_tutorial.lesson.turning_limits import typed_numbers, VELOCITY_PROMPT
+from service_tutorial.lesson.turning_limits import VELOCITY_TOO_HIGH
 from srv_interfaces.action import TurnRobot
 
 ANGLE_PROMPT = '> Type turning angle: '
@@ -41,13 +41,7 @@ class FollowError(RuntimeError):
 
 def parse_turning_goal(angle_text, velocity_text):
     """Turn the typed angle and velocity into (angle, angular_vel) or raise."""
-    try:
-        angle = float(angle_text)
-        velocity = float(velocity_text)
-    except ValueError:
-        raise TurningInputError(NOT_A_NUMBER) from None
-    if not (math.isfinite(angle) and math.isfinite(velocity)):
-        raise TurningInputError(NOT_A_NUMBER)
+    angle, velocity = typed_numbers(angle_text, velocity_text)
     if velocity > MAX_ANGULAR_VEL:
         raise TurningInputError(VELOCITY_TOO_HIGH)
     if not velocity > 0.0:
@@ -183,14 +177,10 @@ def parse_arguments(argv):
 
 def main(args=None):
     """Ask for one turn, follow it, print the result; exit status 0 when it succeeded."""
-    options = parse_arguments(program_arguments(args))
-    goal = options.goal
+    goal = given_or_asked(parse_arguments(program_arguments(args)).goal, ask_turning_goal,
+                          'robot_turning_action_client')
     if goal is None:
-        try:
-            goal = ask_turning_goal(rclpy.logging.get_logger('robot_turning_action_client'))
-        except (EOFError, KeyboardInterrupt):
-            print()
-            return 1
+        return 1
     # Ctrl-C must not shut ROS down: the cancel still has to reach the server. The node spins
     # in a thread of its own and the main thread waits, where Ctrl-C interrupts it at once.
     rclpy.init(args=args, signal_handler_options=SignalHandlerOptions.NO)

@@ -13,7 +13,8 @@ import rclpy
 from rclpy.node import Node
 from service_tutorial.lesson.client_main import program_arguments, run_node
 from service_tutorial.lesson.model_services import response_text
-from service_tutorial.lesson.turning_limits import ask_turning_request, MAX_ANGULAR_VEL
+from service_tutorial.lesson.turning_limits import ask_turning_request, given_or_asked
+from service_tutorial.lesson.turning_limits import MAX_ANGULAR_VEL
 from service_tutorial.lesson.turning_limits import parse_pair_or_nothing, parse_turning_request
 from srv_interfaces.srv import ControlTurningMessage
 
@@ -54,15 +55,10 @@ def parse_arguments(argv):
 
 def main(args=None):
     """Ask for one turn and print the answer; exit status 0 when the turn succeeded."""
-    options = parse_arguments(program_arguments(args))
-    request = options.request
+    request = given_or_asked(parse_arguments(program_arguments(args)).request,
+                             ask_turning_request, 'robot_turning_client')
     if request is None:
-        # Prompt before rclpy takes over Ctrl-C, so that Ctrl-C at a prompt stops the program.
-        try:
-            request = ask_turning_request(rclpy.logging.get_logger('robot_turning_client'))
-        except (EOFError, KeyboardInterrupt):
-            print()
-            return 1
+        return 1
 
     def turn(node):
         if not node.wait_for_server():

@@ -8,6 +8,8 @@ prompts and refusals the lesson's client printed, and the parsing that applies t
 
 import math
 
+import rclpy.logging
+
 MAX_ANGULAR_VEL = 1.5707  # rad/s, the lesson's own limit
 MAX_ANGLE = 20.0 * math.pi  # rad, ten turns either way
 MAX_UINT32 = 2**32 - 1
@@ -22,15 +24,20 @@ class TurningInputError(ValueError):
     """A typed duration or velocity that cannot go into the request."""
 
 
-def parse_turning_request(duration_text, velocity_text, *, max_angular_vel=MAX_ANGULAR_VEL):
-    """Turn the typed duration and velocity into (time_duration, angular_vel) or raise."""
+def typed_numbers(*texts):
+    """Return the typed texts as finite numbers, or raise TurningInputError(NOT_A_NUMBER)."""
     try:
-        duration = float(duration_text)
-        velocity = float(velocity_text)
+        numbers = [float(text) for text in texts]
     except ValueError:
         raise TurningInputError(NOT_A_NUMBER) from None
-    if not (math.isfinite(duration) and math.isfinite(velocity)):
+    if not all(math.isfinite(number) for number in numbers):
         raise TurningInputError(NOT_A_NUMBER)
+    return numbers
+
+
+def parse_turning_request(duration_text, velocity_text, *, max_angular_vel=MAX_ANGULAR_VEL):
+    """Turn the typed duration and velocity into (time_duration, angular_vel) or raise."""
+    duration, velocity = typed_numbers(duration_text, velocity_text)
     if duration < 0 or duration != int(duration) or duration > MAX_UINT32:
         raise TurningInputError(DURATION_NOT_WHOLE)
     if abs(velocity) > max_angular_vel:
@@ -48,6 +55,18 @@ def ask_turning_request(logger, *, read=input, prompts=(DURATION_PROMPT, VELOCIT
             return parse(first_text, velocity_text)
         except TurningInputError as error:
             logger.error(str(error))
+
+
+def given_or_asked(given, ask, program):
+    """Return what the command line gave, or prompt with ask(logger); None if input ends."""
+    if given is not None:
+        return given
+    # Prompted before rclpy takes over Ctrl-C, so that Ctrl-C at a prompt stops the program.
+    try:
+        return ask(rclpy.logging.get_logger(program))
+    except (EOFError, KeyboardInterrupt):
+        print()
+        return None
 
 
 def parse_pair_or_nothing(argv, parser, names, parse, result):

@@ -19,15 +19,13 @@ _ROS1_CAMERA_TAGS = ('cameraName', 'imageTopicName', 'cameraInfoTopicName', 'fra
                      'robotNamespace', 'hackBaseline')
 
 
-class CameraFace(SensorFace):
+class CameraFace(SensorFace, sensor_type=CameraSensor):
     """A camera's sensor_msgs/Image and CameraInfo (gazebo_ros_camera, ROS 1 and ROS 2)."""
-
-    sensor_type = CameraSensor
 
     def __init__(self, node, world, model, plugin, namespace):
         """Place the image and camera_info topics and describe the camera once."""
         super().__init__(node, world, model, plugin, namespace)
-        sensor = self.sensor
+        sensor = plugin
         block, config = sensor.block, sensor.config
         ros1 = any(tag in block.parameters for tag in _ROS1_CAMERA_TAGS)
         if ros1:

@@ -13,15 +13,13 @@ from service_tutorial.world_node.faces.sensor import diagonal, sensor_frame, Sen
 from service_tutorial.world_node.ros_names import plugin_topic
 
 
-class ImuFace(SensorFace):
+class ImuFace(SensorFace, sensor_type=ImuSensor):
     """An IMU's sensor_msgs/Imu (gazebo_ros_imu, ROS 1; gazebo_ros_imu_sensor, ROS 2)."""
-
-    sensor_type = ImuSensor
 
     def __init__(self, node, world, model, plugin, namespace):
         """Place the topic and fill in the covariances, which follow from the noise."""
         super().__init__(node, world, model, plugin, namespace)
-        sensor = self.sensor
+        sensor = plugin
         block = sensor.block
         ros1 = is_ros1_imu(block)
         if ros1:

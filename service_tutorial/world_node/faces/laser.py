@@ -18,15 +18,13 @@ from service_tutorial.world_node.ros_names import plugin_topic
 LASER_SCAN_TYPE = 'sensor_msgs/LaserScan'
 
 
-class LaserScanFace(SensorFace):
+class LaserScanFace(SensorFace, sensor_type=RaySensor):
     """A laser's sensor_msgs/LaserScan (gazebo_ros_laser, gazebo_ros_ray_sensor)."""
-
-    sensor_type = RaySensor
 
     def __init__(self, node, world, model, plugin, namespace):
         """Place the scan topic and fill in what every scan of this laser shares."""
         super().__init__(node, world, model, plugin, namespace)
-        sensor = self.sensor
+        sensor = plugin
         block, config = sensor.block, sensor.config
         ros1 = 'gazebo_ros_laser' in block.filename
         if ros1:

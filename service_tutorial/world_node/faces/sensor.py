@@ -42,6 +42,11 @@ class SensorFace(PluginFace):
 
     sensor_type = None  # the Sensor plugin class the face serves
 
+    def __init_subclass__(cls, *, sensor_type, **kwargs):
+        """Make a face of the sensors of one kind: class LaserScanFace(..., sensor_type=...)."""
+        super().__init_subclass__(**kwargs)
+        cls.sensor_type = sensor_type
+
     @classmethod
     def applies_to(cls, plugin):
         """Tell whether a plugin is a sensor of this face's kind."""
