@@ -5,15 +5,17 @@ MuJoCo's own way for a URDF file: MjSpec.from_string of its text, attach_body in
 spec through a frame, recompile; a delete is spec.delete of the body, its frame and the
 default class the attach brought, then recompile. That world spec is bare: a ground plane and
 the world's physics options, with the same number of tinybots (each from_string as well)
-present. Part of world_benchmark.py, which calls spawn_cost_table().
+present. The spawn_cost section of world_benchmark.py.
 """
 
+import os
 import time
 
+from fleet import core_fleet, fleet_position, model_path, read_model
 import mujoco
 import numpy as np
+from report import Table
 
-SPACING = 1.5
 SPAWN_POSITION = (-2.0, 1.0, 1.0)
 # A description the world has not seen: the same robot, its text made new by a comment.
 COLD, WARM = 'cold', 'warm'
@@ -111,14 +113,15 @@ def _cycles(world, bare, urdf, base_dir, calls, kind):
     return timings
 
 
-def spawn_rows(make_world, read_model, model_dir, fleet_position, present, calls):
+def spawn_rows(present, calls):
     """Return the cold spawn, warm spawn and delete rows of R2-D2 and tinybot beside present."""
     fleet_urdf = read_model('tinybot')
     positions = [fleet_position(index) for index in range(present)]
+    model_dir = os.path.dirname(model_path('r2d2'))
     rows = []
     for robot in ('r2d2', 'tinybot'):
         urdf = read_model(robot)
-        world = make_world(present)
+        world = core_fleet(present, driving=False)
         bare = BareWorld(fleet_urdf, positions)
         # One cycle first: the first spawn of a process pays for imports and caches.
         _cycles(world, bare, urdf, model_dir, 1, COLD)
@@ -139,9 +142,9 @@ def _row(figure, present, calls, world_samples, bare_samples, limit):
     return [figure, present, calls, world_p50, bare_p50, ratio, limit, ratio <= limit]
 
 
-def box_row(make_world, count):
+def box_row(count):
     """Return the row of count box spawns then count deletes, against the same on MjSpec."""
-    world = make_world(0)
+    world = core_fleet(0, driving=False)
     start = time.perf_counter()
     for index in range(count):
         world.spawn_urdf(f'box{index}', BOX_URDF, position=box_position(index))
@@ -169,3 +172,14 @@ NOTE = ('World: spawn_urdf / delete_model on a ROS-free World holding that many 
         'the World gives it) + attach_body + recompile; spec.delete + recompile. The two take '
         'turns. cold: every spawn a URDF text not seen before; warm: the same text again. The '
         'box row gives totals in ms, not p50s.')
+
+
+def spawn_cost_table(config):
+    """Spawn and delete on a World in this process against MuJoCo's own path, no ROS."""
+    table = Table('spawn_cost', "Spawn and delete on World, no ROS, against MuJoCo's own path",
+                  list(COLUMNS))
+    for present in config.cost_counts:
+        table.rows += spawn_rows(present, config.cost_calls)
+    table.rows.append(box_row(config.box_count))
+    table.note = NOTE
+    return table

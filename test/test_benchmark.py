@@ -13,7 +13,8 @@ ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 BENCHMARKS = os.path.join(ROOT, 'benchmarks')
 sys.path.insert(0, BENCHMARKS)
 
-import world_benchmark  # noqa: E402, I100  (benchmarks/ is not a package)
+import report  # noqa: E402, I100  (benchmarks/ is not a package)
+import world_benchmark  # noqa: E402
 
 # Table key -> expected number of rows for the QUICK configuration.
 QUICK = world_benchmark.QUICK
@@ -26,7 +27,7 @@ EXPECTED_ROWS = {
     'turning': len(QUICK.durations) * len(QUICK.velocities),
     'targets': (1 + 2 * len(QUICK.growth_counts) + 6 * len(QUICK.cost_counts) + 1
                 + 2 * len(QUICK.robot_counts)
-                + (world_benchmark.CPU_TARGET_ROBOTS in QUICK.robot_counts) + 1 + 1),
+                + (report.CPU_TARGET_ROBOTS in QUICK.robot_counts) + 1 + 1),
     'core': 2,
     # cold spawn, warm spawn and delete of two robots per world size, and the box sequence
     'spawn_cost': 6 * len(QUICK.cost_counts) + 1,
