@@ -1,0 +1,96 @@
+"""The benchmark (benchmarks/world_benchmark.py) runs end to end with tiny counts."""
+
+import json
+import math
+import os
+import sys
+
+from ament_flake8.main import main_with_errors
+from ament_pep257.main import main as pep257_main
+import pytest
+from repository import ROOT
+
+BENCHMARKS = os.path.join(ROOT, 'benchmarks')
+sys.path.insert(0, BENCHMARKS)
+
+import report  # noqa: E402, I100  (benchmarks/ is not a package)
+import world_benchmark  # noqa: E402
+
+# Table key -> expected number of rows for the QUICK configuration.
+QUICK = world_benchmark.QUICK
+EXPECTED_ROWS = {
+    'round_trips': 4,
+    'spawn_growth': len(QUICK.growth_counts),
+    'free_running': len(QUICK.robot_counts),
+    'real_time': len(QUICK.robot_counts),
+    'startup': 1,
+    'turning': len(QUICK.durations) * len(QUICK.velocities),
+    'targets': (1 + 2 * len(QUICK.growth_counts) + 6 * len(QUICK.cost_counts) + 1
+                + 2 * len(QUICK.robot_counts)
+                + (report.CPU_TARGET_ROBOTS in QUICK.robot_counts) + 1 + 1),
+    'core': 2,
+    # cold spawn, warm spawn and delete of two robots per world size, and the box sequence
+    'spawn_cost': 6 * len(QUICK.cost_counts) + 1,
+    'camera': 1,
+    'sensors': 5,
+    'answers': 3,
+}
+
+
+def check_cell(table, heading, fmt, value):
+    """Numeric columns hold finite numbers, 'within' columns booleans, text columns text."""
+    where = f'{table.key}[{heading}]'
+    if heading in ('within', 'holds') or heading.endswith(' within'):
+        assert isinstance(value, bool), where
+    elif fmt:
+        assert isinstance(value, (int, float)) and not isinstance(value, bool), where
+        assert math.isfinite(value), where
+    else:
+        assert isinstance(value, str) and value, where
+
+
+@pytest.mark.ros
+def test_quick_benchmark_fills_every_table(rclpy_session, tmp_path):
+    config = world_benchmark.Config(**QUICK.__dict__)
+    config.log_path = str(tmp_path / 'nodes.log')
+    printed = []
+    tables = world_benchmark.run(config, report=printed.append)
+
+    assert {table.key: len(table.rows) for table in tables} == EXPECTED_ROWS
+    for table in tables:
+        assert table.rows, table.key
+        for row in table.rows:
+            assert len(row) == len(table.columns), table.key
+            for value, (heading, fmt) in zip(row, table.columns):
+                check_cell(table, heading, fmt, value)
+    assert len(printed) == len(tables)
+    assert all(table.title in text for table, text in zip(tables, printed))
+
+    path = tmp_path / 'benchmark.json'
+    world_benchmark.write_json(str(path), tables, config, world_benchmark.machine())
+    document = json.loads(path.read_text())
+    assert document['machine']['nproc'] >= 1
+    assert set(document['tables']) == set(EXPECTED_ROWS)
+    for key, table in document['tables'].items():
+        assert all(len(row) == len(table['columns']) for row in table['rows']), key
+
+
+def test_command_line_options():
+    config, sections, path = world_benchmark.parse_args(
+        ['--quick', '--robots', '1,3', '--calls', '7', '--json', 'x.json',
+         '--sections', 'speed,startup'])
+    assert config.robot_counts == (1, 3) and config.calls == 7
+    assert sections == ('speed', 'startup') and path == 'x.json'
+    full, all_sections, default_path = world_benchmark.parse_args([])
+    assert full.calls >= 200 and full.robot_counts == (1, 10, 50)
+    assert all_sections == world_benchmark.SECTIONS
+    assert default_path.endswith(os.path.join('output', 'benchmark.json'))
+    with pytest.raises(SystemExit):
+        world_benchmark.parse_args(['--sections', 'nonsense'])
+
+
+@pytest.mark.linter
+def test_benchmarks_follow_the_code_style():
+    rc, errors = main_with_errors(argv=[BENCHMARKS])
+    assert rc == 0, 'flake8:\n' + '\n'.join(errors)
+    assert pep257_main(argv=[BENCHMARKS]) == 0

@@ -1,0 +1,30 @@
+"""Where the repository's files are, for every layer of tests: its root and its robot models."""
+
+import os
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+# The package's robots and scenery, installed to share/service_tutorial/models.
+MODELS = os.path.join(ROOT, 'models')
+# Robots and props written for the tests, never installed.
+TEST_MODELS = os.path.join(ROOT, 'test', 'models')
+# The lesson's own robot files, beside the repository where they are there (never copied).
+LESSON_ROBOTS = os.path.join(os.path.dirname(ROOT), 'shared', 'lesson', 'robots')
+# The lesson's two robots.
+TINYBOT = os.path.join(MODELS, 'tinybot.urdf')
+R2D2 = os.path.join(MODELS, 'r2d2.urdf')
+
+
+def read_file(path):
+    """Return the text of a file."""
+    with open(path, encoding='utf-8') as text_file:
+        return text_file.read()
+
+
+def model_path(name, folder=MODELS):
+    """Return the path of a model, named without .urdf, in models/ or another folder."""
+    return os.path.join(folder, name + '.urdf')
+
+
+def read_model(name, folder=MODELS):
+    """Return the URDF of a model, named without .urdf, in models/ or another folder."""
+    return read_file(model_path(name, folder))

@@ -1,0 +1,110 @@
+"""Spawning the same robot again reuses its description; a delete leaves no trace behind."""
+
+import os
+import shutil
+
+import mujoco
+import pytest
+from repository import model_path, R2D2, read_file, TEST_MODELS, TINYBOT
+from service_tutorial.sim.description import UrdfError
+from service_tutorial.sim.description_cache import DescriptionCache
+from service_tutorial.sim.validation import WorldError
+from service_tutorial.sim.world import World
+
+MESHBOT = model_path('meshbot', TEST_MODELS)
+MISSINGBOT = model_path('missingbot', TEST_MODELS)
+# What a compiled model holds, by count: a trace of a deleted robot would show in one.
+SIZES = ('nbody', 'njnt', 'ngeom', 'nsite', 'ncam', 'nmesh', 'nmeshvert', 'nmat', 'ntex', 'nu',
+         'na', 'nsensor', 'nexclude', 'nq', 'nv', 'nnames')
+
+
+def contents(world):
+    """Return the sizes and element names of a world's compiled model."""
+    model = world.model
+    return {size: getattr(model, size) for size in SIZES}, bytes(model.names)
+
+
+@pytest.mark.parametrize('path', [TINYBOT, R2D2, MESHBOT])
+def test_a_deleted_robot_leaves_nothing_behind(path):
+    world, fresh = World(), World()
+    for one in (world, fresh):
+        one.spawn_urdf_file('first', TINYBOT)
+    for _ in range(3):
+        world.spawn_urdf_file('visitor', path, position=(3.0, 0.0, 0.5))
+        world.spawn_urdf_file('last', TINYBOT, position=(0.0, 3.0, 0.0))
+        world.delete_model('visitor')
+        world.delete_model('last')
+        assert contents(world) == contents(fresh)
+        assert world._spec.find_default('visitor::main') is None
+    # The names are free again, and a robot spawned after the deletes is whole.
+    world.spawn_urdf_file('visitor', path, position=(3.0, 0.0, 0.5))
+    world.step(10)
+    assert world.model_names() == ['first', 'visitor']
+
+
+def test_a_robot_spawned_again_reuses_its_description():
+    world = World()
+    urdf = read_file(TINYBOT)
+    world.spawn_urdf('bot0', urdf, base_dir=os.path.dirname(TINYBOT))
+    world.spawn_urdf('bot1', urdf, base_dir=os.path.dirname(TINYBOT), position=(1.0, 0.0, 0.0))
+    first, second = world.models['bot0'], world.models['bot1']
+    assert first.description is second.description
+    # Each model has plugins of its own, configured from the shared description.
+    assert first.drive() is not second.drive()
+    world.command_velocity('bot0', 0.2, 0.0)
+    world.step(200)
+    assert world.odometry('bot0').position[0] > 0.02
+    assert abs(world.odometry('bot1').position[0]) < 1e-3
+    other = urdf.replace('</robot>', '<!-- another --></robot>')
+    world.spawn_urdf('bot2', other, base_dir=os.path.dirname(TINYBOT), position=(2.0, 0.0, 0.0))
+    assert world.models['bot2'].description is not first.description
+
+
+def test_a_description_is_built_again_when_its_mesh_files_change(tmp_path):
+    shutil.copytree(TEST_MODELS, tmp_path / 'models')
+    path = str(tmp_path / 'models' / 'meshbot.urdf')
+    world = World()
+    world.spawn_urdf_file('before', path)
+    box = tmp_path / 'models' / 'meshes' / 'box.obj'
+    # The same box, twice as large: different bytes, a different size on disk.
+    lines = [(' '.join(['v'] + [str(2.0 * float(v)) for v in line.split()[1:]])
+              if line.startswith('v ') else line) for line in box.read_text().splitlines()]
+    box.write_text('\n'.join(lines) + '\n# twice as large\n')
+    world.spawn_urdf_file('after', path, position=(2.0, 0.0, 0.0))
+    before, after = (world.models[name].description for name in ('before', 'after'))
+    assert before is not after
+    assert after.spec.meshes[-1].uservert[0] == 2.0 * before.spec.meshes[-1].uservert[0]
+    box.unlink()
+    world.spawn_urdf_file('gone', path, position=(4.0, 0.0, 0.0))
+    assert world.models['gone'].description.missing_meshes == ('meshes/box.obj',)
+
+
+def test_missing_meshes_are_looked_for_at_every_spawn(caplog):
+    world = World()
+    for index in range(2):
+        world.spawn_urdf_file(f'missing{index}', MISSINGBOT, position=(2.0 * index, 0.0, 0.0))
+    first, second = (world.models[f'missing{index}'].description for index in range(2))
+    assert first is not second and first.missing_meshes == second.missing_meshes
+    assert caplog.text.count("'meshes/not_there.stl' cannot be had") == 2
+
+
+def test_refusals_are_not_kept():
+    world = World()
+    for _ in range(2):
+        with pytest.raises(WorldError, match='does not parse as XML'):
+            world.spawn_urdf('bad', '<robot name="x"><link name="a"></robot>')
+    assert world.model_names() == []
+
+
+def test_the_cache_keeps_a_bounded_number_of_descriptions():
+    cache = DescriptionCache(None, 0.002, size=2)
+    urdf = read_file(TINYBOT)
+    texts = [urdf.replace('</robot>', f'<!-- {index} --></robot>') for index in range(3)]
+    first = [cache.load(text) for text in texts]
+    # The oldest was dropped; the two latest are kept, as str and bytes apart.
+    assert cache.load(texts[0]) is not first[0]
+    assert cache.load(texts[2]) is first[2]
+    assert cache.load(texts[2].encode()) is not first[2]
+    with pytest.raises(UrdfError):
+        cache.load('<robot/>')
+    assert isinstance(first[0].spec, mujoco.MjSpec)

@@ -1,0 +1,608 @@
+"""The world: spawning, deleting, frames, model state, resets, the diff drive and recovery."""
+
+import logging
+import math
+import os
+
+import mujoco
+import numpy as np
+import pytest
+from repository import R2D2, read_file, TINYBOT
+from service_tutorial.sim.plugins.diff_drive import MAX_WHEEL_RIM_SPEED
+from service_tutorial.sim.validation import WorldError
+from service_tutorial.sim.world import World
+
+FACING_MINUS_Y = (0.707, 0.0, 0.0, -0.707)
+
+
+def heading(quaternion):
+    w, x, y, z = quaternion
+    return math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
+
+
+def yaw_quaternion(yaw):
+    return (math.cos(yaw / 2.0), 0.0, 0.0, math.sin(yaw / 2.0))
+
+
+def tinybot_state(world):
+    """Return everything that describes tinybot's motion as one vector."""
+    state = world.get_model_state('tinybot')
+    _, positions, velocities = world.joint_state('tinybot')
+    return np.concatenate([state.position, state.orientation, state.linear_velocity,
+                           state.angular_velocity, positions, velocities])
+
+
+def drive(worlds, linear_x, angular_z, seconds, period=10):
+    """Command the tinybot of every world at 50 Hz, stepping the worlds in lockstep."""
+    for _ in range(round(seconds / (period * worlds[0].timestep))):
+        for world in worlds:
+            world.command_velocity('tinybot', linear_x, angular_z)
+            world.step(period)
+
+
+@pytest.fixture
+def world():
+    return World()
+
+
+@pytest.fixture
+def tinybot_world():
+    world = World()
+    world.spawn_urdf_file('tinybot', TINYBOT)
+    world.step(250)
+    return world
+
+
+def test_r2d2_dropped_from_one_metre_lands_upright_facing_minus_y(world):
+    world.spawn_urdf('r2d2', read_file(R2D2), position=(-2.0, 1.0, 1.0),
+                     orientation=FACING_MINUS_Y, reference_frame='world')
+    world.step(1000)
+    state = world.get_model_state('r2d2')
+    # base_footprint rests on the floor, sunk by the contact softness only.
+    assert abs(state.position[2]) < 0.01
+    np.testing.assert_allclose(state.position[:2], [-2.0, 1.0], atol=0.02)
+    assert heading(state.orientation) == pytest.approx(-math.pi / 2.0, abs=0.03)
+    assert np.linalg.norm(state.linear_velocity) < 0.01
+
+
+def test_non_unit_quaternion_is_normalised(world):
+    world.spawn_urdf_file('r2d2', R2D2, orientation=(0.0, 0.0, 0.0, 4.0))
+    orientation = world.get_model_state('r2d2').orientation
+    np.testing.assert_allclose(np.abs(orientation), [0.0, 0.0, 0.0, 1.0], atol=1e-12)
+
+
+def test_duplicate_name_is_refused(world):
+    world.spawn_urdf_file('r2d2', R2D2)
+    with pytest.raises(WorldError, match="a model named 'r2d2' already exists"):
+        world.spawn_urdf_file('r2d2', R2D2, position=(3.0, 0.0, 0.0))
+    assert world.model_names() == ['r2d2']
+
+
+@pytest.mark.parametrize('name, message', [
+    ('', 'model name must not be empty'),
+    ('r2/d2', "must not contain '/'"),
+    ('r2 d2', 'must not contain whitespace'),
+    ('r2::d2', "must not contain '::'"),
+    ('r' * 65, 'longer than 64 characters'),
+    ('world', 'reserved for the world frame'),
+])
+def test_bad_model_names_are_refused(world, name, message):
+    with pytest.raises(WorldError, match=message):
+        world.spawn_urdf_file(name, R2D2)
+    assert world.model_names() == []
+
+
+def test_bad_poses_are_refused(world):
+    for kwargs, message in [
+            ({'position': (0.0, math.inf, 0.0)}, 'position contains NaN or infinity'),
+            ({'orientation': (0.0, 0.0, 0.0, 0.0)}, 'orientation quaternion is zero'),
+            ({'orientation': (math.nan, 0.0, 0.0, 1.0)}, 'orientation contains NaN'),
+            ({'reference_frame': 'foo'}, "unknown reference frame 'foo'")]:
+        with pytest.raises(WorldError, match=message):
+            world.spawn_urdf_file('r2d2', R2D2, **kwargs)
+    assert world.model_names() == []
+
+
+def test_model_listing_and_delete(world):
+    world.spawn_urdf_file('tinybot', TINYBOT)
+    world.spawn_urdf_file('r2d2', R2D2, position=(2.0, 0.0, 0.0))
+    assert world.model_names() == ['tinybot', 'r2d2']
+    assert 'r2d2' in world.models and 'c3po' not in world.models
+    assert world.diff_drive_models() == ['tinybot']
+    world.delete_model('r2d2')
+    assert world.model_names() == ['tinybot']
+    with pytest.raises(WorldError, match="no model named 'r2d2'"):
+        world.delete_model('r2d2')
+    assert world.model.nbody == 1 + 7  # the world body and tinybot's seven links
+
+
+def test_reference_frames(world):
+    world.spawn_urdf_file('tinybot', TINYBOT, position=(1.0, 0.0, 0.0),
+                          orientation=yaw_quaternion(math.pi / 2.0))
+    world.spawn_urdf_file('r2d2', R2D2, position=(1.0, 0.0, 0.0), reference_frame='tinybot')
+    in_world = world.get_model_state('r2d2', 'world')
+    np.testing.assert_allclose(in_world.position, [1.0, 1.0, 0.0], atol=1e-9)
+    assert heading(in_world.orientation) == pytest.approx(math.pi / 2.0)
+    in_tinybot = world.get_model_state('r2d2', 'tinybot')
+    np.testing.assert_allclose(in_tinybot.position, [1.0, 0.0, 0.0], atol=1e-9)
+    np.testing.assert_allclose(in_tinybot.orientation, [1.0, 0.0, 0.0, 0.0], atol=1e-9)
+    # tinybot's base_link sits on the wheel axle, 0.033 m above base_footprint.
+    in_link = world.get_model_state('r2d2', 'tinybot::base_link')
+    np.testing.assert_allclose(in_link.position, [1.0, 0.0, -0.033], atol=1e-9)
+    for frame in ('foo', 'tinybot::no_such_link', 'c3po::base_link', 'tinybot::'):
+        with pytest.raises(WorldError, match='unknown reference frame'):
+            world.get_model_state('r2d2', frame)
+    with pytest.raises(WorldError, match="no model named 'c3po'"):
+        world.get_model_state('c3po')
+
+
+def test_set_and_get_model_state(world):
+    world.spawn_urdf_file('r2d2', R2D2)
+    world.spawn_urdf_file('tinybot', TINYBOT, position=(0.0, 3.0, 0.0))
+    orientation = yaw_quaternion(0.6)
+    world.set_model_state('r2d2', position=(3.0, 4.0, 0.5), orientation=orientation,
+                          linear_velocity=(0.5, 0.0, 0.0), angular_velocity=(0.0, 0.0, 0.2))
+    state = world.get_model_state('r2d2')
+    np.testing.assert_allclose(state.position, [3.0, 4.0, 0.5])
+    np.testing.assert_allclose(state.orientation, orientation, atol=1e-12)
+    np.testing.assert_allclose(state.linear_velocity, [0.5, 0.0, 0.0], atol=1e-12)
+    np.testing.assert_allclose(state.angular_velocity, [0.0, 0.0, 0.2], atol=1e-12)
+    world.step(10)
+    assert world.get_model_state('r2d2').position[0] > 3.0
+
+    world.set_model_state('r2d2', position=(0.0, 1.0, 0.0), orientation=(1.0, 0.0, 0.0, 0.0),
+                          linear_velocity=(1.0, 0.0, 0.0), reference_frame='tinybot')
+    relative = world.get_model_state('r2d2', 'tinybot')
+    np.testing.assert_allclose(relative.position, [0.0, 1.0, 0.0], atol=1e-9)
+    np.testing.assert_allclose(relative.linear_velocity, [1.0, 0.0, 0.0], atol=1e-9)
+    np.testing.assert_allclose(world.get_model_state('r2d2').position, [0.0, 4.0, 0.0],
+                               atol=1e-3)
+
+    for kwargs, message in [
+            ({'position': (0.0, 0.0, math.nan)}, 'position contains NaN'),
+            ({'orientation': (0.0, 0.0, 0.0, 0.0)}, 'orientation quaternion is zero'),
+            ({'linear_velocity': (1e9, 0.0, 0.0)}, 'must stay below'),
+            ({'reference_frame': 'nowhere'}, "unknown reference frame 'nowhere'")]:
+        arguments = {'position': (0.0, 0.0, 0.0), 'orientation': (1.0, 0.0, 0.0, 0.0)}
+        arguments.update(kwargs)
+        with pytest.raises(WorldError, match=message):
+            world.set_model_state('r2d2', **arguments)
+    np.testing.assert_allclose(world.get_model_state('r2d2', 'tinybot').position,
+                               [0.0, 1.0, 0.0], atol=1e-9)
+
+
+def test_anchored_model_moves_only_by_pose(world):
+    post = ('<robot name="post"><link name="world"/><link name="pole"><inertial>'
+            '<mass value="1"/><inertia ixx="0.1" iyy="0.1" izz="0.1" ixy="0" ixz="0" iyz="0"/>'
+            '</inertial><collision><geometry><box size="0.1 0.1 1"/></geometry></collision>'
+            '</link><joint name="anchor" type="fixed"><parent link="world"/>'
+            '<child link="pole"/><origin xyz="0 0 0.5"/></joint></robot>')
+    world.spawn_urdf('post', post, position=(2.0, 0.0, 0.0))
+    world.step(100)
+    np.testing.assert_allclose(world.get_model_state('post').position, [2.0, 0.0, 0.5])
+    world.set_model_state('post', position=(-1.0, 0.0, 0.5), orientation=(1.0, 0.0, 0.0, 0.0))
+    world.step(10)
+    np.testing.assert_allclose(world.get_model_state('post').position, [-1.0, 0.0, 0.5])
+    with pytest.raises(WorldError, match='anchored to the world'):
+        world.set_model_state('post', position=(0.0, 0.0, 0.5), orientation=(1, 0, 0, 0),
+                              linear_velocity=(1.0, 0.0, 0.0))
+    world.reset_world()
+    np.testing.assert_allclose(world.get_model_state('post').position, [2.0, 0.0, 0.5])
+
+
+@pytest.mark.parametrize('reset, keeps_time', [('reset_world', True),
+                                               ('reset_simulation', False)])
+def test_resets_put_models_back_at_rest(tinybot_world, reset, keeps_time):
+    world = tinybot_world
+    world.spawn_urdf_file('r2d2', R2D2, position=(-2.0, 1.0, 1.0), orientation=FACING_MINUS_Y)
+    drive([world], 0.2, 0.5, 1.0)
+    time_before = world.time
+    getattr(world, reset)()
+    assert world.model_names() == ['tinybot', 'r2d2']
+    assert world.time == pytest.approx(time_before if keeps_time else 0.0)
+    r2d2 = world.get_model_state('r2d2')
+    np.testing.assert_allclose(r2d2.position, [-2.0, 1.0, 1.0], atol=1e-12)
+    assert heading(r2d2.orientation) == pytest.approx(-math.pi / 2.0, abs=1e-3)
+    tinybot = world.get_model_state('tinybot')
+    np.testing.assert_allclose(tinybot.position, [0.0, 0.0, 0.0], atol=1e-12)
+    assert not np.any(world.data.qvel) and not np.any(world.data.act)
+    odometry = world.odometry('tinybot')
+    assert not np.any(odometry.position) and not np.any(odometry.linear_velocity)
+    # The drive command was cleared: tinybot stays where it is.
+    world.step(250)
+    assert np.linalg.norm(world.get_model_state('tinybot').position[:2]) < 1e-3
+
+
+def test_pause_stops_time(tinybot_world):
+    world = tinybot_world
+    world.command_velocity('tinybot', 0.2, 0.0)
+    world.pause()
+    assert world.paused
+    time, position = world.time, world.get_model_state('tinybot').position
+    assert world.step(100) == 0
+    assert world.time == time
+    np.testing.assert_array_equal(world.get_model_state('tinybot').position, position)
+    world.unpause()
+    assert world.step(100) == 100
+    assert world.time == pytest.approx(time + 100 * world.timestep)
+
+
+@pytest.mark.parametrize('linear_x, angular_z, seconds, tolerance', [
+    (0.0, 0.5, 2.0, 0.015),
+    (0.2, 0.0, 2.0, 0.015),
+    (0.0, 0.1, 1.0, 0.02),
+    (0.0, 1.5, 5.0, 0.02),
+])
+@pytest.mark.parametrize('odometry_source', ['0', '1'])
+def test_tinybot_turns_and_drives_as_commanded(linear_x, angular_z, seconds, tolerance,
+                                               odometry_source):
+    urdf = read_file(TINYBOT).replace('<odometry_source>0</odometry_source>',
+                                      f'<odometry_source>{odometry_source}</odometry_source>')
+    world = World()
+    world.spawn_urdf('tinybot', urdf)
+    world.step(250)
+    start = world.get_model_state('tinybot')
+    turned, last_heading = 0.0, heading(start.orientation)
+    odometry_turned, last_odometry_heading = 0.0, heading(world.odometry('tinybot').orientation)
+
+    def track():
+        nonlocal turned, last_heading, odometry_turned, last_odometry_heading
+        current = heading(world.get_model_state('tinybot').orientation)
+        turned += (current - last_heading + math.pi) % (2.0 * math.pi) - math.pi
+        last_heading = current
+        current = heading(world.odometry('tinybot').orientation)
+        odometry_turned += (current - last_odometry_heading + math.pi) % (2.0 * math.pi) - math.pi
+        last_odometry_heading = current
+
+    for _ in range(round(seconds / 0.02)):
+        world.command_velocity('tinybot', linear_x, angular_z)
+        world.step(10)
+        track()
+    world.command_velocity('tinybot', 0.0, 0.0)
+    for _ in range(25):
+        world.step(10)
+        track()
+
+    end = world.get_model_state('tinybot')
+    travelled = np.linalg.norm(end.position[:2] - start.position[:2])
+    odometry_travelled = np.linalg.norm(world.odometry('tinybot').position[:2])
+    expected_turn, expected_travel = angular_z * seconds, linear_x * seconds
+    scale_turn, scale_travel = max(abs(expected_turn), 1.0), max(expected_travel, 0.1)
+    assert abs(turned - expected_turn) <= tolerance * scale_turn
+    assert abs(travelled - expected_travel) <= tolerance * scale_travel
+    assert abs(odometry_turned - turned) <= tolerance * scale_turn
+    assert abs(odometry_travelled - travelled) <= tolerance * scale_travel
+
+
+def test_command_times_out_and_the_wheels_stop(tinybot_world):
+    world = tinybot_world
+    world.command_velocity('tinybot', 0.2, 0.0)
+    world.step(200)
+    assert world.odometry('tinybot').linear_velocity[0] == pytest.approx(0.2, rel=0.02)
+    # The command lapses at 0.5 s; the wheels then ramp down at 1 m/s^2 for 0.2 s.
+    world.step(250)
+    _, _, wheel_speeds = world.joint_state('tinybot')
+    np.testing.assert_allclose(wheel_speeds, 0.0, atol=1e-3)
+    assert np.linalg.norm(world.get_model_state('tinybot').linear_velocity) < 1e-3
+    position = world.get_model_state('tinybot').position
+    world.step(500)
+    np.testing.assert_allclose(world.get_model_state('tinybot').position, position, atol=1e-4)
+
+
+def test_a_new_cmd_vel_timeout_applies_to_the_command_in_force(tinybot_world):
+    world = tinybot_world
+    world.set_cmd_vel_timeout(0.0)  # never lapse
+    world.command_velocity('tinybot', 0.2, 0.0)
+    world.step(500)  # 1 s, twice the default timeout
+    assert world.odometry('tinybot').linear_velocity[0] == pytest.approx(0.2, rel=0.02)
+    # The command came 1 s ago: with a timeout of 0.6 s it lapsed, and the wheels stop now.
+    world.set_cmd_vel_timeout(0.6)
+    world.step(150)  # the wheels ramp down at 1 m/s^2 for 0.2 s
+    _, _, wheel_speeds = world.joint_state('tinybot')
+    np.testing.assert_allclose(wheel_speeds, 0.0, atol=1e-3)
+    # A new command lasts the new timeout.
+    world.command_velocity('tinybot', 0.2, 0.0)
+    world.step(250)
+    assert world.odometry('tinybot').linear_velocity[0] == pytest.approx(0.2, rel=0.02)
+    world.step(250)
+    _, _, wheel_speeds = world.joint_state('tinybot')
+    np.testing.assert_allclose(wheel_speeds, 0.0, atol=1e-3)
+    with pytest.raises(WorldError, match='cmd_vel_timeout must not be negative: -1.0'):
+        world.set_cmd_vel_timeout(-1)
+
+
+def test_diff_drive_requests_are_checked(world):
+    world.spawn_urdf_file('r2d2', R2D2)
+    with pytest.raises(WorldError, match="model 'r2d2' has no diff drive"):
+        world.command_velocity('r2d2', 0.1, 0.0)
+    with pytest.raises(WorldError, match="no model named 'tinybot'"):
+        world.odometry('tinybot')
+    world.spawn_urdf_file('tinybot', TINYBOT, position=(2.0, 0.0, 0.0))
+    with pytest.raises(WorldError, match='linear_x is NaN'):
+        world.command_velocity('tinybot', math.nan, 0.0)
+    odometry = world.odometry('tinybot')
+    assert (odometry.odometry_frame, odometry.robot_base_frame) == ('odom', 'base_footprint')
+    names, positions, velocities = world.joint_state('tinybot')
+    assert names == ['wheel_left_joint', 'wheel_right_joint']
+    assert positions.shape == velocities.shape == (2,)
+    assert world.joint_state('r2d2')[0] == ['head_swivel']
+
+
+def test_spawn_keeps_a_driving_robot_continuous():
+    plain, busy = World(), World()
+    for world in (plain, busy):
+        world.spawn_urdf_file('tinybot', TINYBOT)
+    drive([plain, busy], 0.2, 0.4, 0.5)
+    before = tinybot_state(busy)
+    busy.spawn_urdf_file('r2d2', R2D2, position=(3.0, 3.0, 1.0))
+    np.testing.assert_array_equal(tinybot_state(busy), before)
+    drive([plain, busy], 0.2, 0.4, 1.0)
+    np.testing.assert_allclose(tinybot_state(busy), tinybot_state(plain), rtol=0, atol=1e-9)
+
+
+def test_delete_keeps_a_driving_robot_continuous():
+    plain, busy = World(), World()
+    for world in (plain, busy):
+        # R2-D2 comes first, so deleting it moves tinybot's place in the MuJoCo arrays.
+        world.spawn_urdf_file('r2d2', R2D2, position=(3.0, 3.0, 0.0))
+        world.spawn_urdf_file('tinybot', TINYBOT)
+    drive([plain, busy], 0.2, -0.4, 0.5)
+    before = tinybot_state(busy)
+    busy.delete_model('r2d2')
+    np.testing.assert_array_equal(tinybot_state(busy), before)
+    drive([plain, busy], 0.2, -0.4, 1.0)
+    np.testing.assert_allclose(tinybot_state(busy), tinybot_state(plain), rtol=0, atol=1e-9)
+
+
+REFUSED_SPAWNS = [
+    ('bad_xml', '<robot name="x"><link name="a"></robot>', 'does not parse as XML'),
+    ('nan_mass', '<robot name="x"><link name="a"><inertial><mass value="nan"/></inertial>'
+                 '</link></robot>', 'NaN'),
+    # These two pass the loader and are refused by the MuJoCo compiler, after the robot was
+    # already attached to the live spec: the world must take it out again.
+    ('lopsided', '<robot name="x"><link name="a"><inertial><mass value="1"/><inertia ixx="1" '
+                 'iyy="1" izz="3" ixy="0" ixz="0" iyz="0"/></inertial></link></robot>',
+     'does not compile: inertia must satisfy'),
+    ('massless', '<robot name="x"><link name="a"><inertial><mass value="1"/><inertia ixx="1" '
+                 'iyy="1" izz="1" ixy="0" ixz="0" iyz="0"/></inertial></link><link name="b"/>'
+                 '<joint name="j" type="continuous"><parent link="a"/><child link="b"/>'
+                 '</joint></robot>', 'does not compile: mass and inertia of moving bodies'),
+]
+
+
+def test_refused_spawns_change_nothing():
+    plain, busy = World(), World()
+    for world in (plain, busy):
+        world.spawn_urdf_file('tinybot', TINYBOT)
+    drive([plain, busy], 0.2, 0.4, 0.3)
+    model = busy.model
+    sizes = (model.nbody, model.njnt, model.ngeom, model.nu, model.nmesh)
+    qpos, qvel, act = busy.data.qpos.copy(), busy.data.qvel.copy(), busy.data.act.copy()
+    for name, urdf, message in REFUSED_SPAWNS:
+        with pytest.raises(WorldError, match=message):
+            busy.spawn_urdf(name, urdf)
+        model = busy.model
+        assert (model.nbody, model.njnt, model.ngeom, model.nu, model.nmesh) == sizes
+        np.testing.assert_array_equal(busy.data.qpos, qpos)
+        np.testing.assert_array_equal(busy.data.qvel, qvel)
+        np.testing.assert_array_equal(busy.data.act, act)
+    assert busy.model_names() == ['tinybot']
+    drive([plain, busy], 0.2, 0.4, 0.5)
+    np.testing.assert_array_equal(busy.data.qpos, plain.data.qpos)
+    # The same names can be used once the robot is sound.
+    busy.spawn_urdf_file('massless', R2D2, position=(3.0, 0.0, 0.0))
+    assert busy.model_names() == ['tinybot', 'massless']
+
+
+@pytest.mark.parametrize('poke', ['nan_velocity', 'huge_velocity', 'nan_position'])
+def test_unstable_robot_is_reset_alone(poke, tmp_path, monkeypatch, caplog):
+    monkeypatch.chdir(tmp_path)
+    plain, broken = World(), World()
+    for world in (plain, broken):
+        world.spawn_urdf_file('tinybot', TINYBOT)
+        world.spawn_urdf_file('r2d2', R2D2, position=(3.0, 3.0, 0.0))
+    drive([plain, broken], 0.2, 0.4, 0.3)
+    # Reach into the MuJoCo data behind the world's back, as a renderer or a bug could.
+    data = broken.data
+    free_joint = broken.model.body('r2d2::base_footprint').jntadr[0]
+    qvel_address = broken.model.jnt_dofadr[free_joint]
+    qpos_address = broken.model.jnt_qposadr[free_joint]
+    if poke == 'nan_velocity':
+        data.qvel[qvel_address + 2] = math.nan
+    elif poke == 'huge_velocity':
+        data.qvel[qvel_address] = 1e12
+    else:
+        data.qpos[qpos_address + 2] = math.nan
+    with caplog.at_level(logging.WARNING, logger='service_tutorial.world'):
+        drive([plain, broken], 0.2, 0.4, 0.3)
+    assert np.isfinite(broken.data.qpos).all() and np.isfinite(broken.data.qvel).all()
+    assert "model 'r2d2'" in caplog.text and "model 'tinybot'" not in caplog.text
+    r2d2 = broken.get_model_state('r2d2')
+    np.testing.assert_allclose(r2d2.position, [3.0, 3.0, 0.0], atol=0.005)
+    np.testing.assert_allclose(tinybot_state(broken), tinybot_state(plain), rtol=0, atol=1e-9)
+    assert broken.model_names() == ['tinybot', 'r2d2']
+    assert not os.path.exists(tmp_path / 'MUJOCO_LOG.TXT')
+
+
+def test_mujoco_warnings_go_to_logging(tmp_path, monkeypatch, caplog):
+    monkeypatch.chdir(tmp_path)
+    world = World()
+    world.spawn_urdf_file('r2d2', R2D2)
+    world.data.qvel[0] = math.inf
+    with caplog.at_level(logging.WARNING, logger='service_tutorial.world'):
+        world.step(5)
+    assert 'MuJoCo: Nan, Inf or huge value' in caplog.text
+    assert os.listdir(tmp_path) == []
+
+
+def test_step_count_and_world_settings():
+    world = World(timestep=0.001, gravity=(0.0, 0.0, -1.62))
+    assert world.timestep == 0.001
+    np.testing.assert_allclose(world.model.opt.gravity, [0.0, 0.0, -1.62])
+    assert world.step(7) == 7 and world.time == pytest.approx(0.007)
+    with pytest.raises(WorldError, match='step count must not be negative'):
+        world.step(-1)
+    with pytest.raises(WorldError, match='timestep must be positive'):
+        World(timestep=0.0)
+
+
+def test_spawned_models_step_exactly_as_bare_mujoco_steps(tinybot_world):
+    # How long spawning and stepping take is the benchmark's business (its core table).
+    world = tinybot_world
+    for index in range(5):
+        world.spawn_urdf_file(f'r2d2_{index}', R2D2, position=(2.0 + index, 0.0, 0.0))
+    assert world.model_names() == ['tinybot'] + [f'r2d2_{index}' for index in range(5)]
+
+    model, data = world.model, world.data
+    kind = mujoco.mjtState.mjSTATE_INTEGRATION
+    raw = mujoco.MjData(model)
+    state = np.empty(mujoco.mj_stateSize(model, kind))
+    mujoco.mj_getState(model, data, state, kind)
+    mujoco.mj_setState(model, raw, state, kind)
+    raw_state = np.empty_like(state)
+    for _ in range(3):
+        assert world.step(1000) == 1000
+        mujoco.mj_step(model, raw, 1000)
+        mujoco.mj_getState(model, data, state, kind)
+        mujoco.mj_getState(model, raw, raw_state, kind)
+        np.testing.assert_array_equal(state, raw_state)
+
+
+def block_robot(mass, size):
+    """Return a 5 kg base with a block of the given mass and size on a hinge."""
+    return ('<robot name="block"><link name="base"><inertial><mass value="5"/><inertia ixx="0.1" '
+            'iyy="0.1" izz="0.1" ixy="0" ixz="0" iyz="0"/></inertial><collision><geometry>'
+            '<box size="0.3 0.3 0.1"/></geometry></collision></link><link name="block">'
+            f'<inertial><mass value="{mass}"/><inertia ixx="{mass}" iyy="{mass}" izz="{mass}" '
+            'ixy="0" ixz="0" iyz="0"/></inertial><collision><geometry>'
+            f'<box size="{size} {size} {size}"/></geometry></collision></link>'
+            '<joint name="hinge" type="continuous"><parent link="base"/><child link="block"/>'
+            '<origin xyz="0.2 0 0"/><axis xyz="0 1 0"/></joint></robot>')
+
+
+@pytest.mark.parametrize('label, urdf', [
+    # No step of a 1e300 kg block can be computed, even at rest.
+    ('heavy', block_robot('1e300', '0.1')),
+    # A block ten thousand kilometres wide swallows tinybot and the floor.
+    ('huge', block_robot('1', '1e7')),
+])
+def test_robot_unstable_at_its_spawn_pose_is_removed_and_the_others_go_on(label, urdf, caplog):
+    plain, broken = World(), World()
+    for world in (plain, broken):
+        world.spawn_urdf_file('tinybot', TINYBOT)
+    drive([plain, broken], 0.2, 0.4, 0.2)
+    broken.spawn_urdf('block', urdf, position=(2.0, 0.0, 0.3))
+    with caplog.at_level(logging.WARNING, logger='service_tutorial.world'):
+        drive([plain, broken], 0.2, 0.4, 0.3)
+    assert broken.model_names() == ['tinybot']
+    assert broken.take_removed_models() == ['block'] and broken.take_removed_models() == []
+    messages = [record.getMessage() for record in caplog.records
+                if record.name == 'service_tutorial.world' and 'MuJoCo' not in record.message]
+    assert messages == [
+        "model 'block' became unstable; it is put back to its spawn pose at rest",
+        "model 'block' became unstable again after it was put back at its spawn pose; it is "
+        'removed from the world']
+    # tinybot went through every retaken step as if the block had never been there.
+    np.testing.assert_allclose(tinybot_state(broken), tinybot_state(plain), rtol=0, atol=1e-9)
+    broken.spawn_urdf_file('block', R2D2, position=(2.0, 0.0, 0.0))
+    assert broken.model_names() == ['tinybot', 'block']
+
+
+def test_robot_made_unstable_from_outside_gets_one_reset_per_placement(caplog):
+    world = World()
+    chain = ('<robot name="chain">' + ''.join(
+        f'<link name="l{i}"><inertial><mass value="1"/><inertia ixx="0.01" iyy="0.01" '
+        'izz="0.01" ixy="0" ixz="0" iyz="0"/></inertial><collision><geometry>'
+        '<box size="0.1 0.1 0.1"/></geometry></collision></link>' for i in range(4)) + ''.join(
+        f'<joint name="j{i}" type="continuous"><parent link="l{i - 1}"/><child link="l{i}"/>'
+        '<origin xyz="0 0.12 0" rpy="0.3 0.2 0.1"/><axis xyz="1 0 0"/></joint>'
+        for i in range(1, 4)) + '</robot>')
+    world.spawn_urdf('chain', chain, position=(0.0, 0.0, 0.5))
+    with caplog.at_level(logging.WARNING, logger='service_tutorial.world'):
+        for _ in range(2):
+            # A spin the physics cannot follow, yet below the velocity limit.
+            world.set_model_state('chain', position=(0.0, 0.0, 0.5),
+                                  orientation=(1.0, 0.0, 0.0, 0.0),
+                                  angular_velocity=(9e4, 9e4, 0.0))
+            world.step(200)
+            assert world.model_names() == ['chain']
+            np.testing.assert_allclose(world.get_model_state('chain').position[:2], [0.0, 0.0],
+                                       atol=0.3)
+    assert caplog.text.count("model 'chain' became unstable; it is put back") == 2
+    assert 'removed' not in caplog.text
+
+
+@pytest.mark.parametrize('linear_x, angular_z', [
+    (1e300, 0.0), (1.7e308, 1.7e308), (-1e308, 1e308), (0.0, -1e300), (40.0, 3.0)])
+def test_absurd_drive_commands_are_scaled_to_the_rim_speed_limit(linear_x, angular_z):
+    world = World()
+    world.spawn_urdf_file('tinybot', TINYBOT)
+    config = world.diff_drive('tinybot')
+    applied_x, applied_z = world.command_velocity('tinybot', linear_x, angular_z)
+    rim_speeds = (applied_x - applied_z * config.wheel_separation / 2.0,
+                  applied_x + applied_z * config.wheel_separation / 2.0)
+    assert max(abs(speed) for speed in rim_speeds) == pytest.approx(MAX_WHEEL_RIM_SPEED)
+    # The turn keeps its direction and, unless the numbers are absurd, its radius.
+    assert math.copysign(1.0, applied_x) == math.copysign(1.0, linear_x)
+    if max(abs(linear_x), abs(angular_z)) < 1e6:
+        assert applied_x / applied_z == pytest.approx(linear_x / angular_z)
+    world.step(500)
+    assert world.model_names() == ['tinybot']
+    assert np.isfinite(world.data.qvel).all()
+    assert np.abs(world.joint_state('tinybot')[2]).max() <= (
+        MAX_WHEEL_RIM_SPEED / config.wheel_radius * 1.01)
+
+
+def test_pose_limits_and_extreme_quaternions(world):
+    with pytest.raises(WorldError, match=r'position must stay below 1e\+08 m in magnitude: '
+                                         r'\[1e\+300, 0.0, 0.0\]'):
+        world.spawn_urdf_file('r2d2', R2D2, position=(1e300, 0.0, 0.0))
+    world.spawn_urdf_file('r2d2', R2D2, orientation=(1e300, 0.0, 0.0, 1e300))
+    np.testing.assert_allclose(world.get_model_state('r2d2').orientation,
+                               [math.sqrt(0.5), 0.0, 0.0, math.sqrt(0.5)], atol=1e-12)
+    world.set_model_state('r2d2', position=(0.0, 0.0, 0.0), orientation=(0.0, 0.0, 0.0, 1e-300))
+    np.testing.assert_allclose(world.get_model_state('r2d2').orientation, [0, 0, 0, 1],
+                               atol=1e-12)
+
+
+def pile(count):
+    """Return a robot of count boxes on hinges, all in one place: thousands of contacts."""
+    # Links of one robot collide with each other only if they say so, as in Gazebo.
+    links = ''.join(
+        f'<link name="b{index}"><inertial><mass value="1"/><inertia ixx="0.01" iyy="0.01" '
+        'izz="0.01" ixy="0" ixz="0" iyz="0"/></inertial><collision><geometry>'
+        '<box size="0.3 0.3 0.3"/></geometry></collision></link>'
+        f'<gazebo reference="b{index}"><selfCollide>true</selfCollide></gazebo>'
+        for index in range(count))
+    joints = ''.join(
+        f'<joint name="j{index}" type="continuous"><parent link="b0"/>'
+        f'<child link="b{index}"/><origin xyz="0 0 {0.001 * index}"/></joint>'
+        for index in range(1, count))
+    return f'<robot name="pile">{links}{joints}</robot>'
+
+
+def test_contacts_beyond_mujocos_memory_refuse_a_spawn_or_reset_the_robot(caplog):
+    plain, crowded = World(), World()
+    for world in (plain, crowded):
+        world.spawn_urdf_file('tinybot', TINYBOT)
+    drive([plain, crowded], 0.2, 0.4, 0.1)
+    before = tinybot_state(crowded)
+    with pytest.raises(WorldError, match=r"model 'heap' cannot be simulated at \[2.0, 0.0, 0.5\]"
+                                         r': mj_stackAlloc: out of memory'):
+        crowded.spawn_urdf('heap', pile(80), position=(2.0, 0.0, 0.5))
+    assert crowded.model_names() == ['tinybot']
+    np.testing.assert_array_equal(tinybot_state(crowded), before)
+
+    crowded.spawn_urdf('a', pile(40), position=(2.0, 0.0, 0.5))
+    crowded.spawn_urdf('b', pile(40), position=(-2.0, 0.0, 0.5))
+    drive([plain, crowded], 0.2, 0.4, 0.1)
+    # Two piles in one place: MuJoCo runs out of memory for their contacts within a step.
+    crowded.set_model_state('b', position=(2.0, 0.0, 0.5), orientation=(1.0, 0.0, 0.0, 0.0))
+    with caplog.at_level(logging.WARNING, logger='service_tutorial.world'):
+        drive([plain, crowded], 0.2, 0.4, 0.2)
+    assert 'MuJoCo: mj_stackAlloc: out of memory' in caplog.text
+    assert "model 'b' became unstable; it is put back to its spawn pose" in caplog.text
+    assert crowded.model_names() == ['tinybot', 'a', 'b']
+    np.testing.assert_allclose(crowded.get_model_state('b').position[:2], [-2.0, 0.0],
+                               atol=1e-3)
+    np.testing.assert_allclose(tinybot_state(crowded), tinybot_state(plain), rtol=0, atol=1e-9)

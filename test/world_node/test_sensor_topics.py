@@ -1,0 +1,188 @@
+"""Sensors through their ROS topics on a real world node: LaserScan, Image, CameraInfo, Imu."""
+
+import math
+import time
+
+from geometry_msgs.msg import Pose
+import numpy as np
+import pytest
+from rclpy.parameter import Parameter
+from repository import read_model, TEST_MODELS
+from rosgraph_msgs.msg import Clock
+from sensor_msgs.msg import CameraInfo, Image, Imu, LaserScan
+from service_tutorial.conversions import seconds_of as seconds
+from service_tutorial.sim.plugins.camera_sensor import CameraSensor
+from service_tutorial.sim.plugins.ray_sensor import RaySensor
+from service_tutorial.world_node.node import MujocoWorld
+from srv_interfaces.srv import GetModelList, SpawnModel
+
+pytestmark = pytest.mark.ros
+
+
+class SensorWorld:
+    """The world node on an executor, with ways to spawn and to wait for messages."""
+
+    def __init__(self, ros, **parameters):
+        self.ros = ros
+        self.node = ros.add_node(MujocoWorld(parameter_overrides=[
+            Parameter(name, value=value) for name, value in parameters.items()]))
+        self.clock = ros.subscribe(Clock, '/clock')
+        assert ros.wait_for(lambda: self.clock, timeout=10.0), 'no /clock from the world'
+
+    def spawn(self, name, xml, *, x=0.0, y=0.0, z=0.0, namespace=''):
+        pose = Pose()
+        pose.position.x, pose.position.y, pose.position.z = x, y, z
+        response = self.ros.call(SpawnModel, '/mujoco/spawn_urdf_model', SpawnModel.Request(
+            model_name=name, model_xml=xml, robot_namespace=namespace, initial_pose=pose,
+            reference_frame='world'))
+        assert response.success, response.status_message
+
+    def topics(self):
+        return {publisher.topic_name for publisher in self.node.publishers}
+
+    def assert_stops(self, sensor):
+        """Wait until the world sees nobody listens to a sensor; then it measures no more."""
+        assert self.ros.wait_for(lambda: not sensor.active, timeout=10.0)
+        last = sensor.reading_time
+        start = self.node.world.time
+        assert self.ros.wait_for(lambda: self.node.world.time > start + 0.5)
+        assert sensor.reading_time == last
+
+    def receive(self, msg_type, topic, count=1, timeout=30.0):
+        """Subscribe, wait for count messages, unsubscribe; return them."""
+        received = []
+        subscription = self.ros.client_node.create_subscription(
+            msg_type, topic, received.append, 10)
+        try:
+            assert self.ros.wait_for(lambda: len(received) >= count, timeout=timeout), \
+                f'{len(received)} of {count} messages on {topic} within {timeout} s'
+        finally:
+            self.ros.client_node.destroy_subscription(subscription)
+        return received
+
+
+def test_laser_scan_on_its_topic_only_while_someone_listens(ros):
+    world = SensorWorld(ros, scenery='', real_time_factor=2.0)
+    world.spawn('post', read_model('sensor_laser', TEST_MODELS), namespace='post')
+    world.spawn('wall', read_model('props/wall', TEST_MODELS), x=1.05)
+    assert '/post/scan' in world.topics()
+    laser = world.node.world.models['post'].plugin(RaySensor)
+    start = world.node.world.time
+    assert ros.wait_for(lambda: world.node.world.time > start + 0.5)
+    assert laser.reading_time is None, 'the laser scanned with nobody listening'
+
+    scans = world.receive(LaserScan, '/post/scan', count=5)
+    scan = scans[-1]
+    assert scan.header.frame_id == 'laser_frame'
+    assert len(scan.ranges) == 181
+    assert scan.angle_min == pytest.approx(-math.pi / 2, abs=1e-6)
+    assert scan.angle_max == pytest.approx(math.pi / 2, abs=1e-6)
+    assert scan.angle_increment == pytest.approx(math.pi / 180, abs=1e-6)
+    assert (scan.range_min, scan.range_max) == pytest.approx((0.05, 5.0))
+    assert scan.scan_time == pytest.approx(0.1)
+    assert scan.ranges[90] == pytest.approx(1.0, abs=0.005)
+    assert math.isinf(scan.ranges[0]) and scan.ranges[0] > 0
+    # 10 Hz in simulation time, stamped with it.
+    stamps = [seconds(msg.header.stamp) for msg in scans]
+    assert np.diff(stamps[1:]) == pytest.approx([0.1] * (len(stamps) - 2), abs=1e-6)
+    # The subscriber left: the laser stops (the world hears of it, then scans no more).
+    world.assert_stops(laser)
+
+
+def test_free_running_a_sensor_is_held_to_its_rate_in_wall_time_too(ros):
+    world = SensorWorld(ros, scenery='', real_time_factor=0.0)
+    world.spawn('post', read_model('sensor_laser', TEST_MODELS), namespace='post')
+    world.spawn('wall', read_model('props/wall', TEST_MODELS), x=1.05)
+    scans = []
+    subscription = ros.client_node.create_subscription(LaserScan, '/post/scan', scans.append, 10)
+    try:
+        assert ros.wait_for(lambda: scans, timeout=10.0)
+        start, first = time.monotonic(), len(scans)
+        sim_start = world.node.world.time
+        assert ros.wait_for(lambda: world.node.world.time > sim_start + 20.0 and
+                            len(scans) >= first + 3, timeout=60.0)
+        wall = time.monotonic() - start
+        count = len(scans) - first
+    finally:
+        ros.client_node.destroy_subscription(subscription)
+    # 10 Hz of simulation time would be 200 scans; held to 10 per wall second, far fewer.
+    assert count <= 10.0 * wall + 2, f'{count} scans in {wall:.2f} s of wall time'
+    stamps = [seconds(msg.header.stamp) for msg in scans]
+    assert all(np.diff(stamps) >= 0.1 - 1e-6), stamps
+    assert all(msg.ranges[90] == pytest.approx(1.0, abs=0.005) for msg in scans)
+
+
+def test_camera_image_and_camera_info_of_a_ros1_camera(ros):
+    world = SensorWorld(ros, scenery='', real_time_factor=0.0)
+    world.spawn('eye', read_model('sensor_camera', TEST_MODELS), namespace='eye')
+    world.spawn('box', read_model('props/red_box', TEST_MODELS), x=1.5)
+    # ROS 1: robotNamespace/cameraName/imageTopicName.
+    assert {'/eye/front/rgb/image_raw', '/eye/front/rgb/camera_info'} <= world.topics()
+    infos = ros.subscribe(CameraInfo, '/eye/front/rgb/camera_info')
+    (image,) = world.receive(Image, '/eye/front/rgb/image_raw')
+    assert (image.width, image.height, image.encoding, image.step) == (160, 120, 'rgb8', 480)
+    assert image.header.frame_id == 'camera_link'
+    pixels = np.frombuffer(bytes(image.data), dtype=np.uint8).reshape(120, 160, 3).astype(int)
+    r, g, b = pixels[60, 80]
+    assert r > 2 * g and r > 2 * b, f'the centre is {pixels[60, 80]}, not red'
+    for row, column in ((60, 0), (60, 159), (0, 80)):
+        r, g, b = pixels[row, column]
+        assert not (r > 2 * g and r > 2 * b), f'({row}, {column}) is red'
+    assert ros.wait_for(lambda: infos, timeout=10.0)
+    info = infos[-1]
+    focal = 160 / 2 / math.tan(1.0 / 2)
+    assert list(info.k) == pytest.approx([focal, 0, 79.5, 0, focal, 59.5, 0, 0, 1])
+    assert (info.width, info.height, info.distortion_model) == (160, 120, 'plumb_bob')
+
+
+def test_the_default_tinybots_ros2_camera_renders_at_its_rate_only_while_watched(ros):
+    world = SensorWorld(ros, real_time_factor=2.0)
+    # ROS 2: <camera_name>camera</camera_name> and no namespace.
+    assert {'/camera/image_raw', '/camera/camera_info'} <= world.topics()
+    camera = world.node.world.models['tinybot'].plugin(CameraSensor)
+    infos = []
+    info_subscription = ros.client_node.create_subscription(
+        CameraInfo, '/camera/camera_info', infos.append, 10)
+    images = world.receive(Image, '/camera/image_raw', count=4)
+    image = images[-1]
+    assert (image.width, image.height, image.encoding, image.step) == (320, 240, 'rgb8', 960)
+    assert image.header.frame_id == 'camera_link'
+    pixels = np.frombuffer(bytes(image.data), dtype=np.uint8).reshape(240, 320, 3)
+    assert pixels.std() > 10.0, 'the yard should not look like one flat colour'
+    # 10 Hz in simulation time, stamped with it.
+    stamps = [seconds(msg.header.stamp) for msg in images]
+    assert np.diff(stamps[1:]) == pytest.approx([0.1] * (len(stamps) - 2), abs=1e-6)
+    assert ros.wait_for(lambda: infos, timeout=10.0)
+    focal = 320 / 2 / math.tan(1.3962634 / 2)
+    assert list(infos[-1].k) == pytest.approx([focal, 0, 159.5, 0, focal, 119.5, 0, 0, 1])
+    assert infos[-1].header.frame_id == 'camera_link'
+    # Nobody watches any more: the camera stops rendering.
+    ros.client_node.destroy_subscription(info_subscription)
+    world.assert_stops(camera)
+
+
+def test_imus_of_both_generations_read_gravity_up(ros):
+    world = SensorWorld(ros)
+    world.spawn('imu_bot', read_model('sensor_imu', TEST_MODELS), y=-2.0, namespace='bot')
+    # The default tinybot's IMU (ROS 2, ~/out:=imu) and the spawned robot's two.
+    topics = {'/imu': 'base_link', '/bot/imu/data': 'base_footprint', '/bot/imu': 'imu_link'}
+    assert set(topics) <= world.topics()
+    for topic, frame in topics.items():
+        msg = world.receive(Imu, topic, count=3)[-1]
+        assert msg.header.frame_id == frame
+        assert msg.linear_acceleration.z == pytest.approx(9.81, abs=0.05), topic
+        assert msg.angular_velocity.z == pytest.approx(0.0, abs=0.01), topic
+        assert abs(msg.orientation.w) == pytest.approx(
+            1.0 if topic != '/bot/imu' else math.sqrt(0.5), abs=0.01)
+
+
+def test_the_default_world_has_the_yard_as_scenery_not_as_a_model(ros):
+    world = SensorWorld(ros, real_time_factor=0.0)
+    names = ros.call(GetModelList, '/mujoco/get_model_list', GetModelList.Request())
+    assert list(names.model_names) == ['tinybot']
+    scan = world.receive(LaserScan, '/scan')[0]
+    ranges = np.array(scan.ranges)
+    assert len(ranges) == 360 and scan.header.frame_id == 'base_scan'
+    # Straight ahead, the yard's east wall 5 m away; every beam meets a wall or a crate.
+    assert ranges[180] == pytest.approx(4.98, abs=0.05)
+    assert np.isfinite(ranges).all()

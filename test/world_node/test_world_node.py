@@ -1,0 +1,350 @@
+"""The MuJoCo world node through its real services and topics, as a ROS user meets it."""
+
+import math
+
+from geometry_msgs.msg import Pose, Twist
+from nav_msgs.msg import Odometry
+import pytest
+from rclpy.parameter import Parameter
+from repository import read_model
+from rosgraph_msgs.msg import Clock
+from sensor_msgs.msg import JointState
+from service_tutorial.conversions import seconds_of as seconds, yaw_of
+from service_tutorial.sim.world import World
+from service_tutorial.world_node.node import MujocoWorld
+from srv_interfaces.srv import DeleteModel, GetModelList, GetModelState, SetModelState
+from srv_interfaces.srv import SpawnModel
+from std_srvs.srv import Empty
+
+pytestmark = pytest.mark.ros
+
+
+def lesson_pose():
+    """R2-D2's pose in the lesson: (-2, 1, 1), turned -90 degrees about z."""
+    pose = Pose()
+    pose.position.x, pose.position.y, pose.position.z = -2.0, 1.0, 1.0
+    pose.orientation.z, pose.orientation.w = -0.707, 0.707
+    return pose
+
+
+class WorldClient:
+    """The world node on an executor, and short ways to call its services."""
+
+    def __init__(self, ros, real_time_factor, parameters=()):
+        self.ros = ros
+        self.node = MujocoWorld(parameter_overrides=[
+            Parameter('real_time_factor', value=real_time_factor), *parameters])
+        # Count the ticks of the step timer: each one is a chance for the world to step.
+        self.ticks = 0
+        step = self.node.step_timer.callback
+
+        def counted_step():
+            step()
+            self.ticks += 1
+        self.node.step_timer.callback = counted_step
+        ros.add_node(self.node)
+        self.clock = ros.subscribe(Clock, '/clock')
+        assert ros.wait_for(lambda: self.clock, timeout=10.0), 'no /clock from the world'
+
+    def now(self):
+        return seconds(self.clock[-1].clock)
+
+    def wait_sim(self, duration):
+        """Wait until `duration` more seconds of simulation time have passed."""
+        end = self.now() + duration
+        assert self.ros.wait_for(lambda: self.now() >= end, timeout=60.0 + 5 * duration)
+
+    def wait_ticks(self, count):
+        """Wait until the world's step timer has fired count more times."""
+        end = self.ticks + count
+        assert self.ros.wait_for(lambda: self.ticks >= end, timeout=10.0 + 0.1 * count)
+
+    def spawn(self, name, xml, pose=None, frame='world', namespace=''):
+        request = SpawnModel.Request(model_name=name, model_xml=xml, robot_namespace=namespace,
+                                     initial_pose=pose or Pose(), reference_frame=frame)
+        return self.ros.call(SpawnModel, '/mujoco/spawn_urdf_model', request)
+
+    def delete(self, name):
+        return self.ros.call(DeleteModel, '/mujoco/delete_model',
+                             DeleteModel.Request(model_name=name))
+
+    def state(self, name, frame=''):
+        return self.ros.call(GetModelState, '/mujoco/get_model_state',
+                             GetModelState.Request(model_name=name, reference_frame=frame))
+
+    def models(self):
+        return list(self.ros.call(GetModelList, '/mujoco/get_model_list',
+                                  GetModelList.Request()).model_names)
+
+    def empty(self, service):
+        return self.ros.call(Empty, '/mujoco/' + service, Empty.Request())
+
+
+@pytest.fixture
+def fast_world(ros):
+    """Start the default world free-running, as fast as the machine can."""
+    return WorldClient(ros, real_time_factor=0.0)
+
+
+@pytest.fixture
+def real_time_world(ros):
+    """Start the default world in real time, for driving with cmd_vel at a human pace."""
+    return WorldClient(ros, real_time_factor=1.0)
+
+
+def resting_height_of_r2d2():
+    """Where R2-D2's base ends up after a long drop in a world of its own."""
+    world = World()
+    world.spawn_urdf('r2d2', read_model('r2d2'), position=(0, 0, 1))
+    world.step(int(5.0 / world.timestep))
+    return world.get_model_state('r2d2').position[2]
+
+
+def test_default_world_holds_tinybot_and_publishes_clock(fast_world):
+    assert fast_world.models() == ['tinybot']
+    start = fast_world.now()
+    fast_world.wait_sim(0.5)
+    assert fast_world.now() > start
+
+
+def test_spawned_r2d2_comes_to_rest_on_the_ground_with_the_lesson_heading(fast_world):
+    response = fast_world.spawn('r2d2', read_model('r2d2'), lesson_pose())
+    assert response.success, response.status_message
+    assert 'r2d2' in response.status_message
+    assert fast_world.models() == ['tinybot', 'r2d2']
+
+    fast_world.wait_sim(2.0)
+    state = fast_world.state('r2d2')
+    assert state.success, state.status_message
+    assert state.pose.position.x == pytest.approx(-2.0, abs=0.02)
+    assert state.pose.position.y == pytest.approx(1.0, abs=0.02)
+    assert state.pose.position.z == pytest.approx(resting_height_of_r2d2(), abs=0.01)
+    assert yaw_of(state.pose.orientation) == pytest.approx(-math.pi / 2, abs=0.03)
+    assert abs(state.twist.linear.z) < 0.01
+    assert state.header.frame_id == 'world'
+
+
+def test_duplicate_spawn_fails_and_delete_works_once(fast_world):
+    assert fast_world.spawn('r2d2', read_model('r2d2'), lesson_pose()).success
+    again = fast_world.spawn('r2d2', read_model('r2d2'), lesson_pose())
+    assert not again.success
+    assert "'r2d2'" in again.status_message and 'exists' in again.status_message
+
+    deleted = fast_world.delete('r2d2')
+    assert deleted.success, deleted.status_message
+    assert fast_world.models() == ['tinybot']
+    twice = fast_world.delete('r2d2')
+    assert not twice.success
+    assert "'r2d2'" in twice.status_message
+
+
+def drive(world, ros, twist, duration):
+    """Publish a Twist on /cmd_vel for `duration` s of simulation time, then a zero Twist."""
+    publisher = ros.client_node.create_publisher(Twist, '/cmd_vel', 10)
+    assert ros.wait_for(lambda: publisher.get_subscription_count() > 0)
+    end = world.now() + duration
+    while world.now() < end:
+        publisher.publish(twist)
+        world.wait_sim(0.01)
+    publisher.publish(Twist())
+    world.wait_sim(0.5)
+    ros.client_node.destroy_publisher(publisher)
+
+
+def test_cmd_vel_turns_tinybot_by_the_commanded_angle(real_time_world, ros):
+    odometry = ros.subscribe(Odometry, '/odom')
+    joint_states = ros.subscribe(JointState, '/joint_states')
+    assert ros.wait_for(lambda: odometry and joint_states)
+    before = real_time_world.state('tinybot')
+    odom_before = yaw_of(odometry[-1].pose.pose.orientation)
+
+    twist = Twist()
+    twist.angular.z = 0.5
+    drive(real_time_world, ros, twist, 2.0)
+
+    after = real_time_world.state('tinybot')
+    turned = yaw_of(after.pose.orientation) - yaw_of(before.pose.orientation)
+    odom_turned = yaw_of(odometry[-1].pose.pose.orientation) - odom_before
+    print(f'\ncmd_vel angular.z 0.5 for 2.0 s: turned {turned:.4f} rad (ground truth), '
+          f'{odom_turned:.4f} rad (/odom)')
+    assert turned == pytest.approx(1.0, rel=0.03)
+    assert odom_turned == pytest.approx(1.0, rel=0.03)
+    assert odometry[-1].header.frame_id == 'odom'
+    assert odometry[-1].child_frame_id in ('base_footprint', 'base_link')
+    assert len(joint_states[-1].name) >= 2
+    assert abs(after.twist.angular.z) < 0.02, 'tinybot kept turning after the zero Twist'
+
+
+def test_cmd_vel_drives_tinybot_forward_by_the_commanded_distance(real_time_world, ros):
+    odometry = ros.subscribe(Odometry, '/odom')
+    assert ros.wait_for(lambda: odometry)
+    before = real_time_world.state('tinybot').pose.position
+    odom_before = odometry[-1].pose.pose.position
+
+    twist = Twist()
+    twist.linear.x = 0.2
+    drive(real_time_world, ros, twist, 2.0)
+
+    after = real_time_world.state('tinybot').pose.position
+    moved = math.hypot(after.x - before.x, after.y - before.y)
+    odom_after = odometry[-1].pose.pose.position
+    odom_moved = math.hypot(odom_after.x - odom_before.x, odom_after.y - odom_before.y)
+    print(f'\ncmd_vel linear.x 0.2 for 2.0 s: moved {moved:.4f} m (ground truth), '
+          f'{odom_moved:.4f} m (/odom)')
+    assert moved == pytest.approx(0.4, rel=0.03)
+    assert odom_moved == pytest.approx(0.4, rel=0.03)
+    assert after.x > before.x
+
+
+def test_reset_world_restores_poses_while_the_clock_goes_on(fast_world, ros):
+    assert fast_world.spawn('r2d2', read_model('r2d2'), lesson_pose()).success
+    moved = Pose()
+    moved.position.x, moved.position.y, moved.orientation.w = 1.5, -0.5, 1.0
+    response = ros.call(SetModelState, '/mujoco/set_model_state', SetModelState.Request(
+        model_name='tinybot', pose=moved, reference_frame='world'))
+    assert response.success, response.status_message
+    fast_world.wait_sim(1.0)
+    assert fast_world.state('tinybot').pose.position.x == pytest.approx(1.5, abs=0.01)
+
+    fast_world.empty('pause_physics')
+    clock_before = fast_world.now()
+    fast_world.empty('reset_world')
+    tinybot = fast_world.state('tinybot')
+    r2d2 = fast_world.state('r2d2')
+    assert tinybot.pose.position.x == pytest.approx(0.0, abs=0.01)
+    assert tinybot.pose.position.y == pytest.approx(0.0, abs=0.01)
+    assert r2d2.pose.position.z == pytest.approx(1.0, abs=0.05)
+    assert fast_world.models() == ['tinybot', 'r2d2']
+    assert seconds(r2d2.header.stamp) >= clock_before, 'reset_world moved the clock back'
+    fast_world.empty('unpause_physics')
+    fast_world.wait_sim(0.1)
+    assert fast_world.now() > clock_before
+
+
+def test_reset_simulation_also_sets_the_clock_back_to_zero(fast_world):
+    assert fast_world.spawn('r2d2', read_model('r2d2'), lesson_pose()).success
+    fast_world.wait_sim(1.5)
+    fast_world.empty('pause_physics')
+    fast_world.empty('reset_simulation')
+    state = fast_world.state('r2d2')
+    assert seconds(state.header.stamp) == 0.0
+    assert state.pose.position.z == pytest.approx(1.0, abs=1e-6)
+    assert fast_world.ros.wait_for(lambda: fast_world.now() == 0.0)
+    assert fast_world.models() == ['tinybot', 'r2d2']
+    fast_world.empty('unpause_physics')
+    fast_world.wait_sim(0.2)
+
+
+def test_pause_physics_stops_simulation_time(fast_world):
+    fast_world.empty('pause_physics')
+    paused_at = fast_world.state('tinybot').header.stamp
+    fast_world.wait_ticks(10)  # ten chances to step, every one of them passed up
+    assert fast_world.state('tinybot').header.stamp == paused_at
+    fast_world.empty('unpause_physics')
+    fast_world.wait_sim(0.1)
+
+
+def test_state_in_a_model_frame_and_in_a_link_frame(fast_world):
+    assert fast_world.spawn('r2d2', read_model('r2d2'), lesson_pose()).success
+    fast_world.empty('pause_physics')
+    world_state = fast_world.state('r2d2')
+    relative = fast_world.state('r2d2', frame='tinybot')
+    assert relative.success, relative.status_message
+    tinybot = fast_world.state('tinybot').pose.position
+    # tinybot has not turned, so the offset is the same in both frames.
+    assert relative.pose.position.x == pytest.approx(world_state.pose.position.x - tinybot.x,
+                                                     abs=1e-3)
+    assert relative.header.frame_id == 'tinybot'
+    assert fast_world.state('r2d2', frame='tinybot::base_link').success
+
+
+def test_every_model_gets_a_ros_interface_under_its_namespace(fast_world):
+    node = fast_world.node
+    beside = Pose()
+    beside.position.x = 2.0
+    spawned = fast_world.spawn('tiny', read_model('tinybot'), beside, namespace='robots/tiny/')
+    assert spawned.success, spawned.status_message
+    assert fast_world.spawn('r2d2', read_model('r2d2'), lesson_pose()).success
+    assert list(node.models) == ['tinybot', 'tiny', 'r2d2']
+    assert node.models['tiny'].namespace == '/robots/tiny'
+    assert node.models['tinybot'].namespace == node.models['r2d2'].namespace == ''
+
+    def topics():
+        return ({publisher.topic_name for publisher in node.publishers}
+                | {subscription.topic_name for subscription in node.subscriptions})
+    tiny_topics = {'/robots/tiny/cmd_vel', '/robots/tiny/odom', '/robots/tiny/joint_states'}
+    assert tiny_topics | {'/cmd_vel', '/odom', '/joint_states'} <= topics()
+    assert not node.models['r2d2'].faces, 'R2-D2 has no plugin with a ROS face'
+    assert fast_world.delete('tiny').success
+    assert list(node.models) == ['tinybot', 'r2d2']
+    assert not tiny_topics & topics()
+
+
+BAD_SPAWNS = [
+    ('', read_model('tinybot'), Pose(), 'world', 'empty'),
+    ('tinybot', read_model('tinybot'), Pose(), 'world', 'exists'),
+    ('broken', '<robot name="broken"><link name="a">', Pose(), 'world', 'XML'),
+    ('sdf', '<sdf version="1.6"><model name="m"/></sdf>', Pose(), 'world', 'URDF'),
+    ('lost', read_model('tinybot'), Pose(), 'nowhere', "'nowhere'"),
+]
+
+
+def bad_pose(**orientation):
+    pose = Pose()
+    pose.position.z = 0.5
+    for axis, value in orientation.items():
+        setattr(pose.orientation, axis, value)
+    return pose
+
+
+def test_every_refusal_names_its_cause_and_changes_nothing(fast_world, ros):
+    assert fast_world.spawn('r2d2', read_model('r2d2'), lesson_pose()).success
+    fast_world.wait_sim(0.3)
+    fast_world.empty('pause_physics')
+    before = {name: fast_world.state(name) for name in fast_world.models()}
+
+    nan_position = Pose()
+    nan_position.position.x = math.nan
+    refusals = BAD_SPAWNS + [
+        ('zero_q', read_model('tinybot'), bad_pose(w=0.0), 'world', 'zero'),
+        ('nan_q', read_model('tinybot'), bad_pose(w=math.nan), 'world', 'NaN'),
+        ('nan_p', read_model('tinybot'), nan_position, 'world', 'NaN'),
+    ]
+    for name, xml, pose, frame, cause in refusals:
+        response = fast_world.spawn(name, xml, pose, frame)
+        assert not response.success, f'{name!r} was spawned'
+        assert cause.lower() in response.status_message.lower(), response.status_message
+
+    unknown = [
+        fast_world.delete('ghost'),
+        fast_world.state('ghost'),
+        fast_world.state('r2d2', frame='ghost'),
+        ros.call(SetModelState, '/mujoco/set_model_state',
+                 SetModelState.Request(model_name='ghost', pose=lesson_pose())),
+        ros.call(SetModelState, '/mujoco/set_model_state',
+                 SetModelState.Request(model_name='r2d2', pose=bad_pose(w=0.0))),
+    ]
+    for response in unknown:
+        assert not response.success
+        assert "'ghost'" in response.status_message or 'zero' in response.status_message
+
+    assert fast_world.models() == list(before)
+    for name, state in before.items():
+        now = fast_world.state(name)
+        assert now.pose == state.pose, f'{name} moved'
+        assert now.twist == state.twist, f'{name} changed speed'
+        assert now.header.stamp == state.header.stamp, 'time went on while paused'
+
+
+@pytest.mark.parametrize('factor', [0.0, 1.0])
+def test_clock_goes_forward_in_whole_steps_at_most_at_its_rate(ros, factor):
+    # How fast each pace runs is the benchmark's business (its free_running and real_time
+    # tables); here, what /clock says at either pace.
+    world = WorldClient(ros, real_time_factor=factor)
+    world.wait_sim(1.0)
+    stamps = [seconds(msg.clock) for msg in list(world.clock)]
+    steps = [stamp / world.node.world.timestep for stamp in stamps]
+    assert all(abs(step - round(step)) < 1e-6 for step in steps), 'a stamp between two steps'
+    # 250 Hz of simulation time at the most (half a step of slack), never backwards.
+    assert all(later - earlier > 0.004 - 0.001 for earlier, later in zip(stamps, stamps[1:]))
+    assert stamps[-1] - stamps[0] >= 1.0

@@ -1,0 +1,242 @@
+"""
+What the world node tells the ROS graph besides its services, through real subscribers.
+
+/clock (also while paused), /tf, robot_description, joint_states, and what it logs on /rosout.
+"""
+
+import logging
+import time
+
+from geometry_msgs.msg import Pose, Twist
+from nav_msgs.msg import Odometry
+import pytest
+from rcl_interfaces.msg import Log
+from rclpy.node import Node
+from rclpy.parameter import Parameter
+from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+from repository import read_model
+from rosgraph_msgs.msg import Clock
+from sensor_msgs.msg import JointState
+from service_tutorial.conversions import seconds_of
+from service_tutorial.world_node.log_forwarding import RclpyHandler
+from service_tutorial.world_node.node import MujocoWorld
+from srv_interfaces.srv import DeleteModel, SpawnModel
+from std_msgs.msg import String
+from std_srvs.srv import Empty
+from tf2_msgs.msg import TFMessage
+
+pytestmark = pytest.mark.ros
+
+LATCHED = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
+                     durability=DurabilityPolicy.TRANSIENT_LOCAL)
+# rclpy's own /clock subscription (TimeSource): best effort, volatile, depth 1.
+TIME_SOURCE = QoSProfile(depth=1, reliability=ReliabilityPolicy.BEST_EFFORT)
+# A joint that moves but is no wheel, added to tinybot: joint_states must cover it too.
+MAST = ('<link name="mast_link"><inertial><mass value="0.05"/><inertia ixx="1e-4" iyy="1e-4" '
+        'izz="1e-4" ixy="0" ixz="0" iyz="0"/></inertial></link>'
+        '<joint name="mast_joint" type="revolute"><parent link="base_link"/>'
+        '<child link="mast_link"/><origin xyz="0 0 0.1"/><axis xyz="0 0 1"/>'
+        '<limit lower="-1" upper="1" effort="1" velocity="1"/></joint></robot>')
+
+
+def start_world(ros, real_time_factor=0.0):
+    """Start the default world (tinybot) and wait for its first /clock."""
+    node = ros.add_node(MujocoWorld(parameter_overrides=[
+        Parameter('real_time_factor', value=real_time_factor)]))
+    clock = ros.subscribe(Clock, '/clock')
+    assert ros.wait_for(lambda: clock), 'no /clock from the world'
+    return node
+
+
+def spawn(ros, name, xml, namespace='', x=0.0):
+    pose = Pose()
+    pose.position.x = x
+    request = SpawnModel.Request(model_name=name, model_xml=xml, robot_namespace=namespace,
+                                 initial_pose=pose)
+    response = ros.call(SpawnModel, '/mujoco/spawn_urdf_model', request)
+    assert response.success, response.status_message
+
+
+def delete(ros, name):
+    response = ros.call(DeleteModel, '/mujoco/delete_model', DeleteModel.Request(model_name=name))
+    assert response.success, response.status_message
+
+
+def wait_sim(ros, world, duration):
+    end = world.world.time + duration
+    assert ros.wait_for(lambda: world.world.time >= end, timeout=30.0)
+
+
+def test_clock_is_transient_local_with_depth_one(ros):
+    world = start_world(ros)
+    qos = world.clock_pub.qos_profile
+    assert (qos.durability, qos.reliability, qos.depth) == (
+        DurabilityPolicy.TRANSIENT_LOCAL, ReliabilityPolicy.RELIABLE, 1)
+
+
+def test_a_late_subscriber_gets_the_time_within_a_second_while_paused(ros):
+    world = start_world(ros)
+    wait_sim(ros, world, 0.3)
+    ros.call(Empty, '/mujoco/pause_physics', Empty.Request())
+    paused_at = world.world.time
+    for qos in (LATCHED, TIME_SOURCE):  # the latched message, then the repeated one
+        received = []  # (wall time, simulation time)
+
+        def clock_callback(msg):
+            received.append((time.monotonic(), seconds_of(msg.clock)))
+        start = time.monotonic()
+        subscription = ros.client_node.create_subscription(Clock, '/clock', clock_callback, qos)
+        assert ros.wait_for(lambda: received, timeout=1.0), \
+            f'no /clock within 1 s for a {qos.durability.name} subscriber'
+        wall, sim = received[0]
+        assert wall - start <= 1.0 and sim == pytest.approx(paused_at, abs=1e-9)
+        ros.client_node.destroy_subscription(subscription)
+
+
+def test_a_node_on_sim_time_started_during_a_pause_learns_the_time(ros):
+    world = start_world(ros)
+    wait_sim(ros, world, 0.5)
+    ros.call(Empty, '/mujoco/pause_physics', Empty.Request())
+    paused_at = world.world.time
+    late = ros.add_node(Node('late_joiner', parameter_overrides=[
+        Parameter('use_sim_time', value=True)]))
+    assert ros.wait_for(lambda: late.get_clock().now().nanoseconds > 0, timeout=1.0), \
+        'a node on use_sim_time did not learn the time within 1 s'
+    assert late.get_clock().now().nanoseconds * 1e-9 == pytest.approx(paused_at, abs=1e-6)
+
+
+def test_tf_carries_odom_to_base_exactly_as_odom_says(ros):
+    # Not free-running, where odom and /tf are also held to their rate in wall time.
+    world = start_world(ros, real_time_factor=2.0)
+    odometry = ros.subscribe(Odometry, '/odom', depth=1000)
+    transforms = ros.subscribe(TFMessage, '/tf', depth=1000)
+    assert ros.wait_for(lambda: odometry and transforms), 'no odom or no /tf'
+    publisher = ros.client_node.create_publisher(Twist, '/cmd_vel', 10)
+    twist = Twist()
+    twist.linear.x, twist.angular.z = 0.3, 0.8  # an arc: x, y and yaw all change
+    publisher.publish(twist)
+    wait_sim(ros, world, 1.0)
+
+    by_stamp = {}
+    for message in list(transforms):
+        for transform in message.transforms:
+            assert (transform.header.frame_id, transform.child_frame_id) == (
+                'odom', 'base_footprint')
+            by_stamp[seconds_of(transform.header.stamp)] = transform.transform
+    matched = 0
+    for odom in list(odometry):
+        transform = by_stamp.get(seconds_of(odom.header.stamp))
+        if transform is None:
+            continue
+        matched += 1
+        pose = odom.pose.pose
+        for a, b in ((transform.translation.x, pose.position.x),
+                     (transform.translation.y, pose.position.y),
+                     (transform.translation.z, pose.position.z),
+                     (transform.rotation.x, pose.orientation.x),
+                     (transform.rotation.y, pose.orientation.y),
+                     (transform.rotation.z, pose.orientation.z),
+                     (transform.rotation.w, pose.orientation.w)):
+            assert a == pytest.approx(b, abs=1e-6)
+    assert matched >= 10, f'only {matched} odom messages had a /tf of the same stamp'
+    assert abs(odometry[-1].pose.pose.position.y) > 0.01, 'tinybot did not move'
+
+
+def test_the_transforms_of_one_turn_go_out_in_one_tf_message(ros):
+    world = start_world(ros, real_time_factor=2.0)
+    spawn(ros, 'tiny', read_model('tinybot'), namespace='tiny', x=2.0)
+    transforms = ros.subscribe(TFMessage, '/tf', depth=1000)
+    assert ros.wait_for(lambda: any(len(m.transforms) == 2 for m in list(transforms))), \
+        'no /tf message carried both robots'
+    wait_sim(ros, world, 0.2)
+    for message in list(transforms):
+        assert len(message.transforms) in (1, 2)  # 1: a message sent before the spawn
+        stamps = {seconds_of(transform.header.stamp) for transform in message.transforms}
+        assert len(stamps) == 1, 'one message, one turn of odometry'
+
+
+def test_a_drive_whose_block_says_no_sends_no_tf(ros):
+    world = start_world(ros)
+    quiet = read_model('tinybot').replace('<publish_odom_tf>true</publish_odom_tf>',
+                                          '<publish_odom_tf>false</publish_odom_tf>')
+    spawn(ros, 'quiet', quiet, namespace='quiet', x=2.0)
+    assert [type(face).__name__ for face in world.models['quiet'].faces] == [
+        'DriveFace', 'LaserScanFace', 'CameraFace', 'ImuFace']
+    assert 'OdomTfFace' in [type(p).__name__ for p in world.models['tinybot'].faces]
+
+
+def test_robot_description_reaches_a_subscriber_that_starts_after_the_world(ros):
+    world = start_world(ros)
+    spawn(ros, 'tiny', read_model('tinybot'), namespace='robots/tiny', x=2.0)
+    spawn(ros, 'r2d2', read_model('r2d2'), x=-2.0)
+    wait_sim(ros, world, 0.1)
+    descriptions = {}
+    for topic in ('/robot_description', '/robots/tiny/robot_description'):
+        descriptions[topic] = []
+        ros.client_node.create_subscription(String, topic, descriptions[topic].append, LATCHED)
+    assert ros.wait_for(lambda: all(descriptions.values()), timeout=5.0), descriptions
+    for topic, received in descriptions.items():
+        assert [msg.data for msg in received] == [read_model('tinybot')], topic
+    # R2-D2 has no plugin with topics, so no description; a deleted model takes its own away.
+    assert set(world.robot_descriptions) == {'tinybot', 'tiny'}
+    delete(ros, 'tiny')
+    assert '/robots/tiny/robot_description' not in {p.topic_name for p in world.publishers}
+
+
+def test_joint_states_cover_every_movable_joint(ros):
+    start_world(ros)
+    with_mast = read_model('tinybot').replace('</robot>', MAST)
+    spawn(ros, 'mast', with_mast, namespace='mast', x=2.0)
+    joint_states = ros.subscribe(JointState, '/mast/joint_states')
+    assert ros.wait_for(lambda: joint_states), 'no joint_states'
+    assert sorted(joint_states[-1].name) == [
+        'mast_joint', 'wheel_left_joint', 'wheel_right_joint']
+    assert len(joint_states[-1].position) == len(joint_states[-1].velocity) == 3
+
+
+def world_log(ros):
+    """Collect what the node named mujoco logs on /rosout, as (level, text)."""
+    received = []
+    ros.client_node.create_subscription(
+        Log, '/rosout', lambda msg: msg.name == 'mujoco' and received.append(
+            (msg.level, msg.msg)), QoSProfile(depth=1000))
+    return received
+
+
+def test_a_spawn_and_a_delete_appear_on_rosout_once_each(ros):
+    world = start_world(ros)
+    log = world_log(ros)
+    assert ros.wait_for(lambda: world.count_subscribers('/rosout') > 0)
+    spawn(ros, 'r2d2', read_model('r2d2'), x=-2.0)
+    delete(ros, 'r2d2')
+    spawned = (Log.INFO, "spawned model 'r2d2' at [-2.0, 0.0, 0.0]")
+    deleted = (Log.INFO, "deleted model 'r2d2'")
+    assert ros.wait_for(lambda: spawned in log and deleted in log, timeout=5.0), log
+    wait_sim(ros, world, 0.1)
+    assert log.count(spawned) == log.count(deleted) == 1
+
+
+def test_core_logs_reach_rosout_at_their_level(ros):
+    world = start_world(ros)
+    log = world_log(ros)
+    core = logging.getLogger('service_tutorial.world')
+    assert ros.wait_for(lambda: world.count_subscribers('/rosout') > 0)
+    for level in (logging.INFO, logging.WARNING, logging.ERROR, logging.INFO):
+        core.log(level, 'level %d from the core', level)
+    expected = [(Log.INFO, 'level 20 from the core'), (Log.WARN, 'level 30 from the core'),
+                (Log.ERROR, 'level 40 from the core'), (Log.INFO, 'level 20 from the core')]
+    assert ros.wait_for(lambda: log[-4:] == expected, timeout=5.0), log
+
+
+def test_the_log_handler_leaves_with_the_node(rclpy_session):
+    core = logging.getLogger('service_tutorial')
+
+    def handlers():
+        return [handler for handler in core.handlers if isinstance(handler, RclpyHandler)]
+    level = core.level
+    world = MujocoWorld()
+    try:
+        assert len(handlers()) == 1 and core.getEffectiveLevel() == logging.INFO
+    finally:
+        world.destroy_node()
+    assert handlers() == [] and core.level == level
