@@ -1,5 +1,5 @@
 """
-Shared pytest harness: an isolated ROS graph and helpers to run nodes and call services.
+Shared pytest harness: an isolated ROS graph, nodes on real executors, the world node, programs.
 
 Every test session claims a ROS_DOMAIN_ID that no other run on this machine holds and keeps
 discovery on localhost, so parallel runs never see each other's nodes. rclpy is initialised
@@ -7,6 +7,7 @@ once per session, only when a test asks for it; the core tests never touch ROS.
 """
 
 import os
+import subprocess
 import threading
 import time
 
@@ -79,6 +80,39 @@ class RosHarness:
         self.client_node.create_subscription(msg_type, topic, received.append, depth)
         return received
 
+    def receive(self, msg_type, topic, *, count=1, timeout=30.0):
+        """Subscribe to a topic until count messages came, then unsubscribe; return them."""
+        received = []
+        subscription = self.client_node.create_subscription(
+            msg_type, topic, received.append, 10)
+        try:
+            assert self.wait_for(lambda: len(received) >= count, timeout=timeout), \
+                f'{len(received)} of {count} messages on {topic} within {timeout} s'
+        finally:
+            self.client_node.destroy_subscription(subscription)
+        return received
+
+    def set_parameter(self, node_name, name, value):
+        """Set one parameter through a node's set_parameters service, as `ros2 param set` does."""
+        from rcl_interfaces.msg import Parameter as ParameterMsg, ParameterValue
+        from rcl_interfaces.srv import SetParameters
+        from rclpy.parameter import Parameter
+        if not isinstance(value, ParameterValue):
+            value = Parameter(name, value=value).get_parameter_value()
+        request = SetParameters.Request(parameters=[ParameterMsg(name=name, value=value)])
+        return self.call(SetParameters, f'/{node_name}/set_parameters', request).results[0]
+
+    def get_parameter(self, node_name, name):
+        """Return one parameter's value from a node's get_parameters service."""
+        from rcl_interfaces.srv import GetParameters
+        request = GetParameters.Request(names=[name])
+        return self.call(GetParameters, f'/{node_name}/get_parameters', request).values[0]
+
+    def start_world(self, **parameters):
+        """Start the world node with these parameters; return it once its first /clock came."""
+        from running_world import RunningWorld
+        return RunningWorld(self, **parameters)
+
     @staticmethod
     def wait_for(predicate, *, timeout=10.0, period=0.002):
         """Wait until predicate() is true; return whether it became true in time."""
@@ -103,3 +137,43 @@ def ros(rclpy_session):
     harness = RosHarness()
     yield harness
     harness.shutdown()
+
+
+@pytest.fixture(scope='class')
+def class_ros(rclpy_session):
+    """Give the tests of a class one harness, for a world they share."""
+    harness = RosHarness()
+    yield harness
+    harness.shutdown()
+
+
+@pytest.fixture
+def fast_world(ros):
+    """Start the default world free-running, as fast as the machine can."""
+    return ros.start_world(real_time_factor=0.0)
+
+
+@pytest.fixture
+def real_time_world(ros):
+    """Start the default world in real time, for driving with cmd_vel at a human pace."""
+    return ros.start_world(real_time_factor=1.0)
+
+
+@pytest.fixture
+def start_program():
+    """Start programs with piped output; any still running when the test ends is killed."""
+    started = []
+
+    def start(command, **options):
+        process = subprocess.Popen(command, **{
+            'stdout': subprocess.PIPE, 'stderr': subprocess.PIPE, 'text': True, **options})
+        started.append(process)
+        return process
+    yield start
+    for process in started:
+        if process.poll() is None:
+            process.kill()
+        process.wait()
+        for stream in (process.stdin, process.stdout, process.stderr):
+            if stream is not None:
+                stream.close()

@@ -8,13 +8,11 @@ from ament_index_python.packages import get_package_prefix
 from geometry_msgs.msg import Pose
 import pytest
 from rclpy.node import Node
-from rosgraph_msgs.msg import Clock
 from service_tutorial.conversions import make_pose, yaw_of
 from service_tutorial.lesson.model_services import delete_model, get_model_state, model_path
 from service_tutorial.lesson.model_services import reset_simulation, response_text
 from service_tutorial.lesson.model_services import ServiceUnavailableError, spawn_model
-from service_tutorial.world_node.node import MujocoWorld
-from srv_interfaces.srv import GetModelList, SpawnModel
+from srv_interfaces.srv import SpawnModel
 from std_srvs.srv import Empty
 
 LIB = os.path.join(get_package_prefix('service_tutorial'), 'lib', 'service_tutorial')
@@ -23,11 +21,6 @@ LIB = os.path.join(get_package_prefix('service_tutorial'), 'lib', 'service_tutor
 def run(executable, *args):
     return subprocess.run([os.path.join(LIB, executable), *args], capture_output=True,
                           text=True, timeout=30)
-
-
-def model_names(ros):
-    return list(ros.call(GetModelList, '/mujoco/get_model_list',
-                         GetModelList.Request()).model_names)
 
 
 @pytest.mark.parametrize('yaw', [0.0, 0.3, -math.pi / 2, 3.0])
@@ -61,8 +54,7 @@ def test_spawn_model_wants_exactly_one_model_description():
 
 @pytest.mark.ros
 def test_lesson_programs_spawn_delete_and_reset(ros):
-    ros.add_node(MujocoWorld())
-    clock = ros.subscribe(Clock, '/clock')
+    world = ros.start_world()
 
     spawned = run('spawn_model_client')
 
@@ -78,19 +70,19 @@ def test_lesson_programs_spawn_delete_and_reset(ros):
 
     assert deleted.returncode == 0, deleted.stderr
     assert 'success: True' in deleted.stdout
-    assert model_names(ros) == ['tinybot']
+    assert world.models() == ['tinybot']
     assert run('delete_model_client', 'r2d2').returncode == 1
 
-    assert ros.wait_for(lambda: clock and clock[-1].clock.sec >= 1)
+    assert ros.wait_for(lambda: world.now() >= 1.0)
     reset = run('reset_simulation_client')
 
     assert reset.returncode == 0, reset.stderr
-    assert ros.wait_for(lambda: clock[-1].clock.sec == 0)
+    assert ros.wait_for(lambda: world.now() < 1.0)
 
 
 @pytest.mark.ros
 def test_functions_call_the_world_from_a_spinning_node(ros):
-    ros.add_node(MujocoWorld())
+    world = ros.start_world()
     node = ros.client_node
 
     spawned = spawn_model(node, 'r2d2', model_file=model_path('r2d2.urdf'),
@@ -102,7 +94,7 @@ def test_functions_call_the_world_from_a_spinning_node(ros):
     assert yaw_of(state.pose.orientation) == pytest.approx(0.3, abs=0.02)
 
     assert delete_model(node, 'r2d2').success
-    assert model_names(ros) == ['tinybot']
+    assert world.models() == ['tinybot']
     gone = delete_model(node, 'r2d2')
     assert not gone.success and 'r2d2' in gone.status_message
 
@@ -111,7 +103,7 @@ def test_functions_call_the_world_from_a_spinning_node(ros):
 
 @pytest.mark.ros
 def test_functions_spin_a_node_no_executor_owns(ros):
-    ros.add_node(MujocoWorld())
+    world = ros.start_world()
     node = Node('lesson_script')
     try:
         with open(model_path('r2d2.urdf')) as urdf_file:
@@ -119,7 +111,7 @@ def test_functions_spin_a_node_no_executor_owns(ros):
 
         assert spawned.success, spawned.status_message
         assert node.executor is None
-        assert 'r2d2' in model_names(ros)
+        assert 'r2d2' in world.models()
         assert delete_model(node, 'r2d2').success
     finally:
         node.destroy_node()

@@ -5,6 +5,7 @@ import os
 import re
 import signal
 import subprocess
+from types import SimpleNamespace
 
 from ament_index_python.packages import get_package_prefix
 from geometry_msgs.msg import Twist
@@ -21,16 +22,6 @@ from test_turning_action_server import ActionWorld, GroundTruth
 
 CLIENT = os.path.join(get_package_prefix('service_tutorial'), 'lib', 'service_tutorial',
                       'robot_turning_action_client')
-
-
-class RecordingLogger:
-    """Stands in for a node's logger and keeps the errors it is given."""
-
-    def __init__(self):
-        self.errors = []
-
-    def error(self, message):
-        self.errors.append(message)
 
 
 @pytest.mark.parametrize('angle, velocity, expected', [
@@ -65,14 +56,15 @@ def test_invalid_input_is_refused_like_the_lessons_client(angle, velocity, messa
 def test_prompts_again_until_a_valid_pair_is_typed():
     typed = iter(['abc', '0.5', '1', '2.0', '1', '0', '1.5708', '0.5', 'never read'])
     prompts = []
-    logger = RecordingLogger()
+    errors = []
+    logger = SimpleNamespace(error=errors.append)  # a node's logger, keeping the errors
 
     def read(prompt):
         prompts.append(prompt)
         return next(typed)
 
     assert ask_turning_goal(logger, read=read) == (1.5708, 0.5)
-    assert logger.errors == [NOT_A_NUMBER, VELOCITY_TOO_HIGH, VELOCITY_NOT_POSITIVE]
+    assert errors == [NOT_A_NUMBER, VELOCITY_TOO_HIGH, VELOCITY_NOT_POSITIVE]
     assert prompts == [ANGLE_PROMPT, VELOCITY_PROMPT] * 4
 
 
@@ -81,7 +73,7 @@ def test_end_of_input_ends_the_prompting():
         raise EOFError
 
     with pytest.raises(EOFError):
-        ask_turning_goal(RecordingLogger(), read=read)
+        ask_turning_goal(SimpleNamespace(error=[].append), read=read)
 
 
 def test_arguments_give_the_goal_without_prompting():
@@ -161,31 +153,23 @@ def test_a_goal_the_server_rejects_is_reported(ros):
 
 
 @pytest.mark.ros
-def test_ctrl_c_cancels_the_goal_and_tinybot_stops(action_world):
+def test_ctrl_c_cancels_the_goal_and_tinybot_stops(action_world, start_program):
     truth = GroundTruth(action_world)
     truth.wait_at_rest()
     before = truth.last
-    client = subprocess.Popen([CLIENT, '2.0', '0.5'], stdout=subprocess.PIPE,
-                              stderr=subprocess.PIPE, text=True)
-    try:
-        seen = []
-        for line in client.stdout:
-            seen.append(line)
-            if progress(line) and progress(line)[0] > 0.2:
-                break
-        client.send_signal(signal.SIGINT)
-        rest, errors = client.communicate(timeout=30)
-    finally:
-        if client.poll() is None:
-            client.kill()
-            client.wait()
+    client = start_program([CLIENT, '2.0', '0.5'])
+    for line in client.stdout:
+        if progress(line) and progress(line)[0] > 0.2:
+            break
+    client.send_signal(signal.SIGINT)
+    rest, errors = client.communicate(timeout=30)
 
     assert client.returncode == 1, errors
     assert 'Traceback' not in errors
     assert 'canceling the goal ...\nstatus: CANCELED\nsuccess: False\n' in rest
     reported = float(re.search(r'^angle_turned: (-?\d+\.\d+)$', rest, re.M).group(1))
     # The robot stops and stays stopped, as ground truth over simulation time shows.
-    truth.wait_sim(0.3)
+    truth.follow_for(0.3)
     assert abs(truth.yaw_rate) < 0.05
     assert action_world.server.turn is None
     assert action_world.cmd_vel[-1] == Twist()
@@ -196,20 +180,13 @@ def test_ctrl_c_cancels_the_goal_and_tinybot_stops(action_world):
 
 
 @pytest.mark.ros
-def test_a_reader_that_goes_away_ends_the_client_quietly(action_world):
-    client = subprocess.Popen([CLIENT, '2.0', '0.5'], stdout=subprocess.PIPE,
-                              stderr=subprocess.PIPE, text=True)
-    try:
-        for line in client.stdout:
-            if progress(line):
-                break
-        client.stdout.close()  # as `robot_turning_action_client 2.0 0.5 | head -2` would
-        errors = client.stderr.read()
-        assert client.wait(timeout=30) == 1
-    finally:
-        if client.poll() is None:
-            client.kill()
-            client.wait()
-        client.stderr.close()
+def test_a_reader_that_goes_away_ends_the_client_quietly(action_world, start_program):
+    client = start_program([CLIENT, '2.0', '0.5'])
+    for line in client.stdout:
+        if progress(line):
+            break
+    client.stdout.close()  # as `robot_turning_action_client 2.0 0.5 | head -2` would
+    errors = client.stderr.read()
+    assert client.wait(timeout=30) == 1
 
     assert 'Traceback' not in errors

@@ -8,16 +8,12 @@ from action_msgs.srv import CancelGoal
 from ament_index_python.packages import get_package_prefix
 from geometry_msgs.msg import Twist
 import pytest
-from rcl_interfaces.msg import Parameter as ParameterMsg, ParameterType, ParameterValue
-from rcl_interfaces.srv import DescribeParameters, SetParameters
+from rcl_interfaces.srv import DescribeParameters
 from rclpy.action import ActionClient
 from rclpy.parameter import Parameter
 from service_tutorial.conversions import seconds_of, yaw_of
-from service_tutorial.lesson.model_services import call
 from service_tutorial.lesson.robot_turning_action_server import RobotTurningActionServer
-from service_tutorial.world_node.node import MujocoWorld
 from srv_interfaces.action import TurnRobot
-from srv_interfaces.srv import GetModelState
 
 pytestmark = pytest.mark.ros
 
@@ -56,7 +52,7 @@ class GroundTruth:
     def wait_at_rest(self):
         assert self.follow_until(lambda: abs(self.yaw_rate) < 1e-3), 'tinybot did not stop'
 
-    def wait_sim(self, duration):
+    def follow_for(self, duration):
         """Sample until `duration` more seconds of simulation time have passed."""
         end = self.time + duration
         assert self.follow_until(lambda: self.time >= end)
@@ -90,20 +86,16 @@ class ActionWorld:
 
     def __init__(self, ros, **server_parameters):
         self.ros = ros
-        self.world = ros.add_node(MujocoWorld(parameter_overrides=[
-            Parameter('real_time_factor', value=1.0)]))
+        self.world = ros.start_world(real_time_factor=1.0)
         overrides = [Parameter('use_sim_time', value=True)]
         overrides += [Parameter(name, value=value) for name, value in server_parameters.items()]
         self.server = ros.add_node(RobotTurningActionServer(parameter_overrides=overrides))
         self.cmd_vel = ros.subscribe(Twist, '/cmd_vel')
-        node = ros.client_node
-        self.state_cli = node.create_client(GetModelState, '/mujoco/get_model_state')
-        self.action_client = ActionClient(node, TurnRobot, '/turn_robot')
+        self.action_client = ActionClient(ros.client_node, TurnRobot, '/turn_robot')
         assert self.action_client.wait_for_server(timeout_sec=10.0)
 
     def state(self):
-        request = GetModelState.Request(model_name='tinybot', reference_frame='world')
-        state = call(self.ros.client_node, self.state_cli, request)
+        state = self.world.state('tinybot', 'world')
         assert state.success, state.status_message
         return state
 
@@ -187,7 +179,7 @@ def test_a_cancel_stops_tinybot_at_once_and_returns_what_was_turned(action_world
     truth.wait_at_rest()
     truth.turned = 0.0
     goal = Goal(action_world, 2.0, 0.5)
-    truth.wait_sim(1.0)
+    truth.follow_for(1.0)
     assert truth.yaw_rate == pytest.approx(0.5, abs=0.05), 'not turning at full speed yet'
 
     cancel = goal.handle.cancel_goal_async()
@@ -254,7 +246,7 @@ def test_bad_goals_are_rejected_and_tinybot_stays_still(
     before = truth.last
 
     goal = Goal(action_world, angle, angular_vel)
-    truth.wait_sim(0.5)
+    truth.follow_for(0.5)
 
     assert not goal.handle.accepted
     assert action_world.cmd_vel == []
@@ -289,16 +281,10 @@ def test_parameters_are_described_and_held_to_their_ranges(ros):
     assert read_only == {'feedback_rate'}
     ranges = {descriptor.name: descriptor.floating_point_range[0] for descriptor in described}
     assert ranges['max_angular_vel'].to_value == pytest.approx(1.5707)
-
-    def set_double(name, value):
-        parameter = ParameterMsg(name=name, value=ParameterValue(
-            type=ParameterType.PARAMETER_DOUBLE, double_value=value))
-        return ros.call(SetParameters, '/robot_turning_action_server/set_parameters',
-                        SetParameters.Request(parameters=[parameter])).results[0]
-
-    assert not set_double('max_angular_vel', 2.0).successful
-    assert not set_double('feedback_rate', 20.0).successful
-    assert set_double('max_angular_vel', 1.0).successful
+    server = 'robot_turning_action_server'
+    assert not ros.set_parameter(server, 'max_angular_vel', 2.0).successful
+    assert not ros.set_parameter(server, 'feedback_rate', 20.0).successful
+    assert ros.set_parameter(server, 'max_angular_vel', 1.0).successful
 
 
 def test_a_goal_without_odometry_is_aborted_with_the_reason(ros):

@@ -2,6 +2,7 @@
 
 import os
 import subprocess
+from types import SimpleNamespace
 
 from ament_index_python.packages import get_package_prefix
 from geometry_msgs.msg import Twist
@@ -15,16 +16,6 @@ from service_tutorial.lesson.turning_limits import VELOCITY_PROMPT, VELOCITY_TOO
 
 CLIENT = os.path.join(get_package_prefix('service_tutorial'), 'lib', 'service_tutorial',
                       'robot_turning_client')
-
-
-class RecordingLogger:
-    """Stands in for a node's logger and keeps the errors it is given."""
-
-    def __init__(self):
-        self.errors = []
-
-    def error(self, message):
-        self.errors.append(message)
 
 
 @pytest.mark.parametrize('duration, velocity, expected', [
@@ -57,14 +48,15 @@ def test_invalid_input_is_refused_with_the_lessons_message(duration, velocity, m
 def test_prompts_again_until_a_valid_pair_is_typed():
     typed = iter(['abc', '0.5', '2', '2.0', '2', '0.5', 'never read', 'never read'])
     prompts = []
-    logger = RecordingLogger()
+    errors = []
+    logger = SimpleNamespace(error=errors.append)  # a node's logger, keeping the errors
 
     def read(prompt):
         prompts.append(prompt)
         return next(typed)
 
     assert ask_turning_request(logger, read=read) == (2, 0.5)
-    assert logger.errors == [NOT_A_NUMBER, VELOCITY_TOO_HIGH]
+    assert errors == [NOT_A_NUMBER, VELOCITY_TOO_HIGH]
     assert prompts == [DURATION_PROMPT, VELOCITY_PROMPT] * 3
 
 
@@ -73,7 +65,7 @@ def test_end_of_input_ends_the_prompting():
         raise EOFError
 
     with pytest.raises(EOFError):
-        ask_turning_request(RecordingLogger(), read=read)
+        ask_turning_request(SimpleNamespace(error=[].append), read=read)
 
 
 def test_arguments_give_the_request_without_prompting():

@@ -7,10 +7,8 @@ import pytest
 from rcl_interfaces.srv import GetParameters
 from rclpy.parameter import Parameter
 from service_tutorial.conversions import yaw_of
-from service_tutorial.lesson.model_services import call
 from service_tutorial.lesson.robot_turning_server import RobotTurningServer
-from service_tutorial.world_node.node import MujocoWorld
-from srv_interfaces.srv import ControlTurningMessage, GetModelState
+from srv_interfaces.srv import ControlTurningMessage
 
 pytestmark = pytest.mark.ros
 
@@ -24,13 +22,12 @@ class TurningWorld:
 
     def __init__(self, ros):
         self.ros = ros
-        self.world = ros.add_node(MujocoWorld())
+        self.world = ros.start_world()
         self.server = ros.add_node(RobotTurningServer(
             parameter_overrides=[Parameter('use_sim_time', value=True)]))
         self.cmd_vel = ros.subscribe(Twist, '/cmd_vel')
-        node = ros.client_node
-        self.state_cli = node.create_client(GetModelState, '/mujoco/get_model_state')
-        self.turning_cli = node.create_client(ControlTurningMessage, '/control_robot_angle')
+        self.turning_cli = ros.client_node.create_client(ControlTurningMessage,
+                                                         '/control_robot_angle')
         assert self.turning_cli.wait_for_service(timeout_sec=10.0)
 
     def heading(self):
@@ -38,8 +35,7 @@ class TurningWorld:
         return yaw_of(self.state().pose.orientation)
 
     def state(self):
-        request = GetModelState.Request(model_name='tinybot', reference_frame='world')
-        state = call(self.ros.client_node, self.state_cli, request)
+        state = self.world.state('tinybot', 'world')
         assert state.success, state.status_message
         return state
 

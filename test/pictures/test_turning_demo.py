@@ -72,23 +72,16 @@ def test_a_failing_step_stops_the_demo_with_a_clear_message(tmp_path):
     assert_gone(child_pids(finished.stdout))
 
 
-def test_ctrl_c_mid_demo_stops_the_children(tmp_path):
-    demo = subprocess.Popen([DEMO, '--log-dir', str(tmp_path)], stdout=subprocess.PIPE,
-                            stderr=subprocess.STDOUT, text=True)
-    try:
-        seen = []
-        for line in demo.stdout:
-            seen.append(line)
-            if line.startswith('[2/6]'):
-                break
-        demo.send_signal(signal.SIGINT)
-        rest = demo.stdout.read()
-        assert demo.wait(timeout=30) == 1
-    finally:
-        if demo.poll() is None:
-            demo.kill()
-            demo.wait()
-        demo.stdout.close()
+def test_ctrl_c_mid_demo_stops_the_children(tmp_path, start_program):
+    demo = start_program([DEMO, '--log-dir', str(tmp_path)], stderr=subprocess.STDOUT)
+    seen = []
+    for line in demo.stdout:
+        seen.append(line)
+        if line.startswith('[2/6]'):
+            break
+    demo.send_signal(signal.SIGINT)
+    rest = demo.stdout.read()
+    assert demo.wait(timeout=30) == 1
 
     assert 'interrupted' in rest
     assert 'mujoco_world stopped' in rest and 'robot_turning_server stopped' in rest

@@ -12,20 +12,18 @@ import types
 
 from ament_index_python.packages import get_package_prefix
 from file_opens import FileOpens
-from geometry_msgs.msg import Pose, Twist
+from geometry_msgs.msg import Twist
 import mujoco
 from nav_msgs.msg import Odometry
 import numpy as np
 import pytest
 from rcl_interfaces.msg import Log
-from rclpy.parameter import Parameter
 from repository import LESSON_ROBOTS, read_model, TEST_MODELS
+from running_world import lesson_pose
 from sensor_msgs.msg import JointState
-from service_tutorial.conversions import seconds_of as seconds, yaw_of
+from service_tutorial.conversions import make_pose, seconds_of as seconds, yaw_of
 from service_tutorial.lesson.spawn_model_client import split_xacro_arguments
 from service_tutorial.world_node.node import left_out_of
-import test_world_node
-from test_world_node import lesson_pose, WorldClient
 
 pytestmark = pytest.mark.ros
 
@@ -42,46 +40,16 @@ def spawn_client(*args):
     return subprocess.run([CLIENT, *args], capture_output=True, text=True, timeout=60)
 
 
-def pose_at(x, y, z=0.05):
-    pose = Pose()
-    pose.position.x, pose.position.y, pose.position.z = float(x), float(y), float(z)
-    return pose
-
-
 def tilt_of(orientation):
     """Return the angle between a body's z axis and the world's, in radians."""
     q = orientation
     return math.acos(max(-1.0, min(1.0, 1.0 - 2.0 * (q.x * q.x + q.y * q.y))))
 
 
-def drive(world, ros, commands, duration):
-    """Publish {topic: Twist} for duration s of simulation time, then zero Twists."""
-    publishers = {topic: ros.client_node.create_publisher(Twist, topic, 10)
-                  for topic in commands}
-    assert ros.wait_for(lambda: all(publisher.get_subscription_count() > 0
-                                    for publisher in publishers.values())), \
-        f'nobody subscribes to {list(commands)}'
-    end = world.now() + duration
-    while world.now() < end:
-        for topic, twist in commands.items():
-            publishers[topic].publish(twist)
-        world.wait_sim(0.01)
-    for publisher in publishers.values():
-        publisher.publish(Twist())
-    world.wait_sim(0.5)
-    for publisher in publishers.values():
-        ros.client_node.destroy_publisher(publisher)
-
-
 def twist(linear_x=0.0, angular_z=0.0):
     msg = Twist()
     msg.linear.x, msg.angular.z = float(linear_x), float(angular_z)
     return msg
-
-
-def node_topics(node):
-    return ({publisher.topic_name for publisher in node.publishers}
-            | {subscription.topic_name for subscription in node.subscriptions})
 
 
 def body_geoms(world, body):
@@ -95,11 +63,6 @@ def wheel_spacing(world, left_body, right_body):
     """Return the distance between two wheel bodies' origins in the compiled model, in m."""
     data = world.node.world.data
     return float(np.linalg.norm(data.body(left_body).xpos - data.body(right_body).xpos))
-
-
-# The world node's fixtures, shared with its own tests.
-fast_world = test_world_node.fast_world
-real_time_world = test_world_node.real_time_world
 
 
 def settle(world, name):
@@ -232,19 +195,19 @@ def test_the_lessons_tinybot_xacro_spawns_through_the_client_and_turns(
 
 
 def test_plugin_namespaces_and_remaps_put_the_topics_where_gazebo_would(real_time_world, ros):
-    world, node = real_time_world, real_time_world.node
+    world = real_time_world
     ros2_drive = read_model('ros_namespaced_drive', TEST_MODELS)
     quiet = ros2_drive.replace('<publish_odom>true</publish_odom>', '')
-    for name, xml, pose, namespace in [
-            ('bot', ros2_drive, pose_at(2, 0), ''),
-            ('fleet_bot', ros2_drive, pose_at(2, 2), 'fleet/one'),
-            ('r1', read_model('ros_ros1_namespaced_drive', TEST_MODELS), pose_at(-2, -1), ''),
-            ('quiet', quiet, pose_at(-2, 2), 'quiet'),
-            ('skid', read_model('skidbot_ros1', TEST_MODELS), pose_at(0, -3), '')]:
-        response = world.spawn(name, xml, pose, namespace=namespace)
-        assert response.success, response.status_message
+    ros1_drive = read_model('ros_ros1_namespaced_drive', TEST_MODELS)
+    for name, xml, (x, y), namespace in [
+            ('bot', ros2_drive, (2.0, 0.0), ''),
+            ('fleet_bot', ros2_drive, (2.0, 2.0), 'fleet/one'),
+            ('r1', ros1_drive, (-2.0, -1.0), ''),
+            ('quiet', quiet, (-2.0, 2.0), 'quiet'),
+            ('skid', read_model('skidbot_ros1', TEST_MODELS), (0.0, -3.0), '')]:
+        world.spawn_or_fail(name, xml, make_pose(x, y, 0.05), namespace=namespace)
 
-    topics = node_topics(node)
+    topics = world.topics()
     assert {'/bot/cmd', '/bot/odometry/wheels', '/fleet/one/cmd', '/fleet/one/odometry/wheels',
             '/r1/drive/cmd_vel', '/r1_odom', '/r1/joint_states', '/quiet/cmd',
             '/skidbot/cmd_vel', '/skidbot/odom'} <= topics
@@ -259,8 +222,8 @@ def test_plugin_namespaces_and_remaps_put_the_topics_where_gazebo_would(real_tim
     names = world.models()
     before = {name: world.state(name).pose for name in names}
 
-    drive(world, ros, {'/bot/cmd': twist(linear_x=0.2), '/r1/drive/cmd_vel': twist(0.2),
-                       '/quiet/cmd': twist(0.2), '/skidbot/cmd_vel': twist(0.2)}, 1.0)
+    world.drive({'/bot/cmd': twist(linear_x=0.2), '/r1/drive/cmd_vel': twist(0.2),
+                 '/quiet/cmd': twist(0.2), '/skidbot/cmd_vel': twist(0.2)}, 1.0)
 
     moved = {name: math.hypot(world.state(name).pose.position.x - before[name].position.x,
                               world.state(name).pose.position.y - before[name].position.y)
@@ -282,7 +245,7 @@ def test_plugin_namespaces_and_remaps_put_the_topics_where_gazebo_would(real_tim
             assert sum(abs(value) for value in matrix) == pytest.approx(x + y + yaw + 3e12)
 
     assert world.delete('bot').success
-    assert not {'/bot/cmd', '/bot/odometry/wheels'} & node_topics(node)
+    assert not {'/bot/cmd', '/bot/odometry/wheels'} & world.topics()
 
 
 def test_xacro_with_find_and_arguments_through_the_client(real_time_world, ros):
@@ -299,7 +262,7 @@ def test_xacro_with_find_and_arguments_through_the_client(real_time_world, ros):
     assert model.geom_size[mast] == pytest.approx([0.005, 0.005, 0.25])
     before = settle(real_time_world, 'masted').pose.position
 
-    drive(real_time_world, ros, {'/masted/cmd_vel': twist(linear_x=0.2)}, 1.0)
+    real_time_world.drive({'/masted/cmd_vel': twist(linear_x=0.2)}, 1.0)
     after = real_time_world.state('masted').pose.position
     assert after.x - before.x == pytest.approx(0.2, rel=0.1)
 
@@ -318,17 +281,15 @@ def test_a_xacro_file_not_named_xacro_spawns_with_what_was_left_out_named(fast_w
 
 def test_start_up_models_may_be_xacro_and_the_log_names_what_was_left_out(ros):
     log = ros.subscribe(Log, '/rosout', depth=1000)
-    world = WorldClient(ros, real_time_factor=0.0, parameters=[
-        Parameter('models', value=['tinybot.urdf',
-                                   os.path.join(TEST_MODELS, 'ros_gripper_parts.xml'),
-                                   os.path.join(TEST_MODELS, 'ros_mast_tinybot.urdf.xacro')]),
-        Parameter('model_names', value=['tinybot', 'gripper', 'masted']),
-        Parameter('model_namespaces', value=['', '', 'masted']),
-        Parameter('model_poses', value=[0.0, 0.0, 0.0, 0.0, 2.0, 2.0, 0.5, 0.0,
-                                        -2.0, -2.0, 0.02, 0.0])])
+    world = ros.start_world(
+        real_time_factor=0.0,
+        models=['tinybot.urdf', os.path.join(TEST_MODELS, 'ros_gripper_parts.xml'),
+                os.path.join(TEST_MODELS, 'ros_mast_tinybot.urdf.xacro')],
+        model_names=['tinybot', 'gripper', 'masted'], model_namespaces=['', '', 'masted'],
+        model_poses=[0.0, 0.0, 0.0, 0.0, 2.0, 2.0, 0.5, 0.0, -2.0, -2.0, 0.02, 0.0])
 
     assert world.models() == ['tinybot', 'gripper', 'masted']
-    assert '/masted/cmd_vel' in node_topics(world.node)
+    assert '/masted/cmd_vel' in world.topics()
     # The world's log names each part it left out once, with the reason.
     left_out = [
         "model 'gripper': mesh 'meshes/ros_never_there.stl' cannot be had, so it is left out: "
@@ -378,7 +339,7 @@ def test_a_xacro_include_in_a_request_is_refused_and_never_read(fast_world, tmp_
                f'<xacro:include filename="{included}"/><link name="a"/></robot>')
 
     with FileOpens([str(included)], str(tmp_path)) as opens:
-        response = fast_world.spawn('sneaky', request, pose_at(0, 3, 0.5))
+        response = fast_world.spawn('sneaky', request, make_pose(0.0, 3.0, 0.5))
     assert not response.success
     assert response.status_message == (
         'SpawnModel: model_xml contains xacro macros; run xacro on it first')

@@ -19,14 +19,10 @@ from nav_msgs.msg import Odometry
 import pytest
 from rclpy.parameter import Parameter
 from repository import read_model, ROOT
-from rosgraph_msgs.msg import Clock
-from service_tutorial.conversions import fill_pose_msg, fill_twist_msg, seconds_of, yaw_of
+from service_tutorial.conversions import fill_pose_msg, fill_twist_msg, yaw_of
 from service_tutorial.lesson.robot_turning_server import RobotTurningServer
 from service_tutorial.sim.plugins.diff_drive import MAX_WHEEL_RIM_SPEED
-from service_tutorial.world_node.node import MujocoWorld
-from srv_interfaces.srv import ControlTurningMessage, DeleteModel, GetModelList, GetModelState
-from srv_interfaces.srv import SetModelState, SpawnModel
-from std_srvs.srv import Empty
+from srv_interfaces.srv import ControlTurningMessage, DeleteModel, GetModelState, SetModelState
 
 pytestmark = pytest.mark.ros
 
@@ -218,86 +214,33 @@ BAD_STATE_CALLS = [
 ]
 
 
-class WorldCalls:
-    """A MujocoWorld on an executor of its own, and short ways to call it."""
-
-    def __init__(self, ros, real_time_factor=0.0):
-        self.ros = ros
-        self.node = ros.add_node(MujocoWorld(parameter_overrides=[
-            Parameter('real_time_factor', value=real_time_factor)]))
-        self.clock = ros.subscribe(Clock, '/clock')
-        self.clients = {}
-        assert ros.wait_for(lambda: self.clock, timeout=10.0), 'no /clock from the world'
-
-    def now(self):
-        return seconds_of(self.clock[-1].clock)
-
-    def wait_sim(self, duration):
-        end = self.now() + duration
-        assert self.ros.wait_for(lambda: self.now() >= end, timeout=30.0 + 10 * duration)
-
-    def call(self, srv_type, name, request, timeout=10.0):
-        """Call a world service through a client kept for the next calls."""
-        client = self.clients.get(name)
-        if client is None:
-            client = self.ros.client_node.create_client(srv_type, '/mujoco/' + name)
-            assert client.wait_for_service(timeout_sec=10.0), f'no /mujoco/{name}'
-            self.clients[name] = client
-        future = client.call_async(request)
-        assert self.ros.wait_for(future.done, timeout=timeout), f'/mujoco/{name} is silent'
-        return future.result()
-
-    def spawn(self, name, xml, initial_pose=None, frame='', namespace='', timeout=10.0):
-        return self.call(SpawnModel, 'spawn_urdf_model', SpawnModel.Request(
-            model_name=name, model_xml=xml, robot_namespace=namespace,
-            initial_pose=initial_pose or pose(), reference_frame=frame), timeout=timeout)
-
-    def state(self, name):
-        return self.call(GetModelState, 'get_model_state', GetModelState.Request(model_name=name))
-
-    def set_state(self, name, new_pose, new_twist=None):
-        return self.call(SetModelState, 'set_model_state', SetModelState.Request(
-            model_name=name, pose=new_pose, twist=new_twist or Twist()))
-
-    def delete(self, name):
-        return self.call(DeleteModel, 'delete_model', DeleteModel.Request(model_name=name))
-
-    def models(self):
-        return list(self.call(GetModelList, 'get_model_list', GetModelList.Request()).model_names)
-
-    def empty(self, service):
-        self.call(Empty, service, Empty.Request())
-
-    def snapshot(self):
-        """Return every model's pose and twist, as exact numbers."""
-        snapshot = {}
-        for name in self.models():
-            state = self.state(name)
-            assert state.success, state.status_message
-            snapshot[name] = (pose_values(state.pose), twist_values(state.twist))
-        return snapshot
+def snapshot(world):
+    """Return every model's pose and twist, as exact numbers."""
+    states = {}
+    for name in world.models():
+        state = world.state(name)
+        assert state.success, state.status_message
+        states[name] = (pose_values(state.pose), twist_values(state.twist))
+    return states
 
 
 @pytest.fixture(scope='class')
-def paused_world(rclpy_session):
+def paused_world(class_ros):
     """Give a class tinybot and R2-D2 in a world paused after R2-D2 has landed."""
-    from conftest import RosHarness
-    ros = RosHarness()
-    world = WorldCalls(ros)
-    assert world.spawn('r2d2', read_model('r2d2'), pose(x=-2.0, y=1.0, z=1.0)).success
+    world = class_ros.start_world(real_time_factor=0.0)
+    world.spawn_or_fail('r2d2', read_model('r2d2'), pose(x=-2.0, y=1.0, z=1.0))
     world.wait_sim(0.5)
     world.empty('pause_physics')
-    yield world
-    ros.shutdown()
+    return world
 
 
 @pytest.fixture
 def untouched(paused_world):
     """Check after a test that the node answers and that no model moved or was lost."""
-    before = paused_world.snapshot()
+    before = snapshot(paused_world)
     assert list(before) == ['tinybot', 'r2d2']
     yield paused_world
-    assert paused_world.snapshot() == before
+    assert snapshot(paused_world) == before
 
 
 class TestRefusals:
@@ -380,10 +323,10 @@ class TestRefusals:
         watched = list(canary.values()) + ['/etc/passwd', '/etc/shadow']
         with FileOpens(watched, str(tmp_path)) as opens:
             for xml in refused:
-                response = untouched.spawn('reader', xml)
+                response = untouched.spawn('reader', xml, pose())
                 assert not response.success, xml
             for xml in left_out + loaded:
-                response = untouched.spawn('reader', xml)
+                response = untouched.spawn('reader', xml, pose())
                 assert response.success, response.status_message
                 assert untouched.delete('reader').success
         assert opens.opened() == []
@@ -409,10 +352,9 @@ def test_the_file_watch_sees_python_and_mujoco_reading_a_file(tmp_path):
 
 def world_with(ros, *robots, real_time_factor=0.0):
     """Start a world with tinybot and the given (name, xml, pose, namespace)."""
-    world = WorldCalls(ros, real_time_factor)
+    world = ros.start_world(real_time_factor=real_time_factor)
     for name, xml, initial_pose, namespace in robots:
-        response = world.spawn(name, xml, initial_pose, namespace=namespace)
-        assert response.success, response.status_message
+        world.spawn_or_fail(name, xml, initial_pose, namespace=namespace)
     return world
 
 
@@ -500,7 +442,7 @@ def test_unstable_physics_resets_the_culprit_and_the_world_goes_on(ros, caplog):
         world.wait_sim(0.5)
     assert "model 'spinner' became unstable; it is put back to its spawn pose" in caplog.text
     assert len(world.clock) > clock_before, '/clock stopped'
-    assert all(finite(msg.clock.sec, msg.clock.nanosec) for msg in world.clock)
+    assert all(finite(stamp) for _, stamp in world.clock)
     assert all_finite_odometry(odometry)
     assert world.models() == ['tinybot', 'spinner']
     spinner_state = world.state('spinner')
@@ -531,8 +473,7 @@ def test_a_model_that_cannot_be_simulated_is_removed_and_the_world_goes_on(ros, 
     assert (tinybot_after.x, tinybot_after.y) == pytest.approx(
         (tinybot_before.x, tinybot_before.y), abs=1e-6)
     # Its topics went with it; those of the robot that is sound stay.
-    topics = ({publisher.topic_name for publisher in world.node.publishers}
-              | {subscription.topic_name for subscription in world.node.subscriptions})
+    topics = world.topics()
     assert {'/sound/odom', '/sound/joint_states', '/sound/cmd_vel'} <= topics
     assert not [topic for topic in topics if topic.startswith('/monolith/')]
     # Nothing of it is left behind: the name is free again.
@@ -540,18 +481,15 @@ def test_a_model_that_cannot_be_simulated_is_removed_and_the_world_goes_on(ros, 
 
 
 @pytest.fixture(scope='class')
-def turning(rclpy_session):
+def turning(class_ros):
     """Give a class a real-time world and the lesson's turning server on sim time."""
-    from conftest import RosHarness
-    ros = RosHarness()
     # Real time: against a free-running world, message latency becomes simulated time.
-    world = WorldCalls(ros, real_time_factor=1.0)
-    ros.add_node(RobotTurningServer(parameter_overrides=[
+    world = class_ros.start_world(real_time_factor=1.0)
+    class_ros.add_node(RobotTurningServer(parameter_overrides=[
         Parameter('use_sim_time', value=True)]))
-    client = ros.client_node.create_client(ControlTurningMessage, '/control_robot_angle')
+    client = class_ros.client_node.create_client(ControlTurningMessage, '/control_robot_angle')
     assert client.wait_for_service(timeout_sec=10.0)
-    yield world, client
-    ros.shutdown()
+    return world, client
 
 
 def turn(turning, time_duration, angular_vel, *, timeout=30.0):

@@ -10,16 +10,11 @@ import math
 import os
 import shutil
 
-from geometry_msgs.msg import Pose
 import numpy as np
 import pytest
-from rclpy.parameter import Parameter
 from repository import LESSON_ROBOTS
-from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import CameraInfo, Image, Imu, LaserScan
-from service_tutorial.conversions import seconds_of as seconds
-from service_tutorial.world_node.node import MujocoWorld
-from srv_interfaces.srv import DeleteModel, SpawnModel
+from service_tutorial.conversions import make_pose, seconds_of as seconds
 
 GCAMP_GAZEBO = os.path.join(LESSON_ROBOTS, 'gcamp_gazebo')
 
@@ -46,40 +41,18 @@ def lesson_tinybot(tmp_path, monkeypatch):
     return xacro.process_file(str(source), mappings={}).toxml()
 
 
-def first(ros, msg_type, topic, accept=lambda msg: True, timeout=60.0):
-    """Subscribe to a topic until a message passes accept(); return it and unsubscribe."""
-    received = []
-    subscription = ros.client_node.create_subscription(
-        msg_type, topic, lambda msg: received.append(msg) if accept(msg) else None, 10)
-    try:
-        assert ros.wait_for(lambda: received, timeout=timeout), \
-            f'no {msg_type.__name__} on {topic} within {timeout} s'
-    finally:
-        ros.client_node.destroy_subscription(subscription)
-    return received[0]
-
-
 def test_the_lesson_tinybot_publishes_scan_camera_and_imu(ros, lesson_tinybot):
-    world = ros.add_node(MujocoWorld(parameter_overrides=[
-        Parameter('real_time_factor', value=0.0)]))
-    clock = ros.subscribe(Clock, '/clock')
-    assert ros.wait_for(lambda: clock, timeout=10.0), 'no /clock from the world'
+    world = ros.start_world(real_time_factor=0.0)
     # The lesson's world holds its tinybot alone, in the yard: the project's makes way.
-    deleted = ros.call(DeleteModel, '/mujoco/delete_model', DeleteModel.Request(
-        model_name='tinybot'))
+    deleted = world.delete('tinybot')
     assert deleted.success, deleted.status_message
-    pose = Pose()
-    pose.position.z = 0.1  # the footprint is at the wheel axle
-    response = ros.call(SpawnModel, '/mujoco/spawn_urdf_model', SpawnModel.Request(
-        model_name='tinybot', model_xml=lesson_tinybot, robot_namespace='tb2',
-        initial_pose=pose, reference_frame='world'))
-    assert response.success, response.status_message
-    topics = {publisher.topic_name for publisher in world.publishers}
+    # The footprint is at the wheel axle.
+    world.spawn_or_fail('tinybot', lesson_tinybot, make_pose(0.0, 0.0, 0.1), namespace='tb2')
     # /scan is absolute; imu/data and the camera's are relative, so under tb2 (as in Gazebo).
     assert {'/scan', '/tb2/imu/data', '/tb2/camera/rgb/image_raw',
-            '/tb2/camera/rgb/camera_info'} <= topics
+            '/tb2/camera/rgb/camera_info'} <= world.published_topics()
 
-    scan = first(ros, LaserScan, '/scan')
+    scan = ros.receive(LaserScan, '/scan', timeout=60.0)[0]
     ranges = np.array(scan.ranges)
     assert len(ranges) == 720 and scan.header.frame_id == 'hokuyo'
     assert scan.angle_increment == pytest.approx(math.pi / 719, abs=1e-6)
@@ -90,7 +63,7 @@ def test_the_lesson_tinybot_publishes_scan_camera_and_imu(ros, lesson_tinybot):
           f'frame {scan.header.frame_id}, ranges[0] {ranges[0]:.3f} m (right), '
           f'ranges[360] {ranges[360]:.3f} m (ahead), ranges[719] {ranges[719]:.3f} m (left)')
 
-    imu = first(ros, Imu, '/tb2/imu/data')
+    imu = ros.receive(Imu, '/tb2/imu/data', timeout=60.0)[0]
     acceleration = imu.linear_acceleration
     assert acceleration.z == pytest.approx(9.81, abs=0.05)
     print(f'/tb2/imu/data at t={seconds(imu.header.stamp):.3f} s: frame '
@@ -100,7 +73,7 @@ def test_the_lesson_tinybot_publishes_scan_camera_and_imu(ros, lesson_tinybot):
           f'{acceleration.z:.3f}) m/s^2')
 
     info = ros.subscribe(CameraInfo, '/tb2/camera/rgb/camera_info')
-    image = first(ros, Image, '/tb2/camera/rgb/image_raw', timeout=120.0)
+    image = ros.receive(Image, '/tb2/camera/rgb/image_raw', timeout=120.0)[0]
     assert (image.width, image.height, image.encoding) == (800, 800, 'rgb8')
     assert image.header.frame_id == 'camera'
     pixels = np.frombuffer(bytes(image.data), dtype=np.uint8).reshape(800, 800, 3)

@@ -3,75 +3,35 @@
 import math
 import time
 
-from geometry_msgs.msg import Pose
 import numpy as np
 import pytest
-from rclpy.parameter import Parameter
 from repository import read_model, TEST_MODELS
-from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import CameraInfo, Image, Imu, LaserScan
-from service_tutorial.conversions import seconds_of as seconds
+from service_tutorial.conversions import make_pose, seconds_of as seconds
 from service_tutorial.sim.plugins.camera_sensor import CameraSensor
 from service_tutorial.sim.plugins.ray_sensor import RaySensor
-from service_tutorial.world_node.node import MujocoWorld
-from srv_interfaces.srv import GetModelList, SpawnModel
 
 pytestmark = pytest.mark.ros
 
 
-class SensorWorld:
-    """The world node on an executor, with ways to spawn and to wait for messages."""
-
-    def __init__(self, ros, **parameters):
-        self.ros = ros
-        self.node = ros.add_node(MujocoWorld(parameter_overrides=[
-            Parameter(name, value=value) for name, value in parameters.items()]))
-        self.clock = ros.subscribe(Clock, '/clock')
-        assert ros.wait_for(lambda: self.clock, timeout=10.0), 'no /clock from the world'
-
-    def spawn(self, name, xml, *, x=0.0, y=0.0, z=0.0, namespace=''):
-        pose = Pose()
-        pose.position.x, pose.position.y, pose.position.z = x, y, z
-        response = self.ros.call(SpawnModel, '/mujoco/spawn_urdf_model', SpawnModel.Request(
-            model_name=name, model_xml=xml, robot_namespace=namespace, initial_pose=pose,
-            reference_frame='world'))
-        assert response.success, response.status_message
-
-    def topics(self):
-        return {publisher.topic_name for publisher in self.node.publishers}
-
-    def assert_stops(self, sensor):
-        """Wait until the world sees nobody listens to a sensor; then it measures no more."""
-        assert self.ros.wait_for(lambda: not sensor.active, timeout=10.0)
-        last = sensor.reading_time
-        start = self.node.world.time
-        assert self.ros.wait_for(lambda: self.node.world.time > start + 0.5)
-        assert sensor.reading_time == last
-
-    def receive(self, msg_type, topic, count=1, timeout=30.0):
-        """Subscribe, wait for count messages, unsubscribe; return them."""
-        received = []
-        subscription = self.ros.client_node.create_subscription(
-            msg_type, topic, received.append, 10)
-        try:
-            assert self.ros.wait_for(lambda: len(received) >= count, timeout=timeout), \
-                f'{len(received)} of {count} messages on {topic} within {timeout} s'
-        finally:
-            self.ros.client_node.destroy_subscription(subscription)
-        return received
+def assert_stops(world, sensor):
+    """Wait until the world sees nobody listens to a sensor; then it measures no more."""
+    assert world.ros.wait_for(lambda: not sensor.active, timeout=10.0)
+    last = sensor.reading_time
+    world.wait_sim(0.5)
+    assert sensor.reading_time == last
 
 
 def test_laser_scan_on_its_topic_only_while_someone_listens(ros):
-    world = SensorWorld(ros, scenery='', real_time_factor=2.0)
-    world.spawn('post', read_model('sensor_laser', TEST_MODELS), namespace='post')
-    world.spawn('wall', read_model('props/wall', TEST_MODELS), x=1.05)
-    assert '/post/scan' in world.topics()
+    world = ros.start_world(scenery='', real_time_factor=2.0)
+    world.spawn_or_fail('post', read_model('sensor_laser', TEST_MODELS), namespace='post')
+    world.spawn_or_fail('wall', read_model('props/wall', TEST_MODELS), make_pose(1.05))
+    assert '/post/scan' in world.published_topics()
     laser = world.node.world.models['post'].plugin(RaySensor)
-    start = world.node.world.time
-    assert ros.wait_for(lambda: world.node.world.time > start + 0.5)
+    world.wait_sim(0.5)
     assert laser.reading_time is None, 'the laser scanned with nobody listening'
 
-    scans = world.receive(LaserScan, '/post/scan', count=5)
+    scans = ros.receive(LaserScan, '/post/scan', count=5)
     scan = scans[-1]
     assert scan.header.frame_id == 'laser_frame'
     assert len(scan.ranges) == 181
@@ -86,13 +46,13 @@ def test_laser_scan_on_its_topic_only_while_someone_listens(ros):
     stamps = [seconds(msg.header.stamp) for msg in scans]
     assert np.diff(stamps[1:]) == pytest.approx([0.1] * (len(stamps) - 2), abs=1e-6)
     # The subscriber left: the laser stops (the world hears of it, then scans no more).
-    world.assert_stops(laser)
+    assert_stops(world, laser)
 
 
 def test_free_running_a_sensor_is_held_to_its_rate_in_wall_time_too(ros):
-    world = SensorWorld(ros, scenery='', real_time_factor=0.0)
-    world.spawn('post', read_model('sensor_laser', TEST_MODELS), namespace='post')
-    world.spawn('wall', read_model('props/wall', TEST_MODELS), x=1.05)
+    world = ros.start_world(scenery='', real_time_factor=0.0)
+    world.spawn_or_fail('post', read_model('sensor_laser', TEST_MODELS), namespace='post')
+    world.spawn_or_fail('wall', read_model('props/wall', TEST_MODELS), make_pose(1.05))
     scans = []
     subscription = ros.client_node.create_subscription(LaserScan, '/post/scan', scans.append, 10)
     try:
@@ -113,13 +73,13 @@ def test_free_running_a_sensor_is_held_to_its_rate_in_wall_time_too(ros):
 
 
 def test_camera_image_and_camera_info_of_a_ros1_camera(ros):
-    world = SensorWorld(ros, scenery='', real_time_factor=0.0)
-    world.spawn('eye', read_model('sensor_camera', TEST_MODELS), namespace='eye')
-    world.spawn('box', read_model('props/red_box', TEST_MODELS), x=1.5)
+    world = ros.start_world(scenery='', real_time_factor=0.0)
+    world.spawn_or_fail('eye', read_model('sensor_camera', TEST_MODELS), namespace='eye')
+    world.spawn_or_fail('box', read_model('props/red_box', TEST_MODELS), make_pose(1.5))
     # ROS 1: robotNamespace/cameraName/imageTopicName.
-    assert {'/eye/front/rgb/image_raw', '/eye/front/rgb/camera_info'} <= world.topics()
+    assert {'/eye/front/rgb/image_raw', '/eye/front/rgb/camera_info'} <= world.published_topics()
     infos = ros.subscribe(CameraInfo, '/eye/front/rgb/camera_info')
-    (image,) = world.receive(Image, '/eye/front/rgb/image_raw')
+    image = ros.receive(Image, '/eye/front/rgb/image_raw')[0]
     assert (image.width, image.height, image.encoding, image.step) == (160, 120, 'rgb8', 480)
     assert image.header.frame_id == 'camera_link'
     pixels = np.frombuffer(bytes(image.data), dtype=np.uint8).reshape(120, 160, 3).astype(int)
@@ -136,14 +96,14 @@ def test_camera_image_and_camera_info_of_a_ros1_camera(ros):
 
 
 def test_the_default_tinybots_ros2_camera_renders_at_its_rate_only_while_watched(ros):
-    world = SensorWorld(ros, real_time_factor=2.0)
+    world = ros.start_world(real_time_factor=2.0)
     # ROS 2: <camera_name>camera</camera_name> and no namespace.
-    assert {'/camera/image_raw', '/camera/camera_info'} <= world.topics()
+    assert {'/camera/image_raw', '/camera/camera_info'} <= world.published_topics()
     camera = world.node.world.models['tinybot'].plugin(CameraSensor)
     infos = []
     info_subscription = ros.client_node.create_subscription(
         CameraInfo, '/camera/camera_info', infos.append, 10)
-    images = world.receive(Image, '/camera/image_raw', count=4)
+    images = ros.receive(Image, '/camera/image_raw', count=4)
     image = images[-1]
     assert (image.width, image.height, image.encoding, image.step) == (320, 240, 'rgb8', 960)
     assert image.header.frame_id == 'camera_link'
@@ -158,17 +118,18 @@ def test_the_default_tinybots_ros2_camera_renders_at_its_rate_only_while_watched
     assert infos[-1].header.frame_id == 'camera_link'
     # Nobody watches any more: the camera stops rendering.
     ros.client_node.destroy_subscription(info_subscription)
-    world.assert_stops(camera)
+    assert_stops(world, camera)
 
 
 def test_imus_of_both_generations_read_gravity_up(ros):
-    world = SensorWorld(ros)
-    world.spawn('imu_bot', read_model('sensor_imu', TEST_MODELS), y=-2.0, namespace='bot')
+    world = ros.start_world()
+    world.spawn_or_fail('imu_bot', read_model('sensor_imu', TEST_MODELS), make_pose(0.0, -2.0),
+                        namespace='bot')
     # The default tinybot's IMU (ROS 2, ~/out:=imu) and the spawned robot's two.
     topics = {'/imu': 'base_link', '/bot/imu/data': 'base_footprint', '/bot/imu': 'imu_link'}
-    assert set(topics) <= world.topics()
+    assert set(topics) <= world.published_topics()
     for topic, frame in topics.items():
-        msg = world.receive(Imu, topic, count=3)[-1]
+        msg = ros.receive(Imu, topic, count=3)[-1]
         assert msg.header.frame_id == frame
         assert msg.linear_acceleration.z == pytest.approx(9.81, abs=0.05), topic
         assert msg.angular_velocity.z == pytest.approx(0.0, abs=0.01), topic
@@ -177,10 +138,9 @@ def test_imus_of_both_generations_read_gravity_up(ros):
 
 
 def test_the_default_world_has_the_yard_as_scenery_not_as_a_model(ros):
-    world = SensorWorld(ros, real_time_factor=0.0)
-    names = ros.call(GetModelList, '/mujoco/get_model_list', GetModelList.Request())
-    assert list(names.model_names) == ['tinybot']
-    scan = world.receive(LaserScan, '/scan')[0]
+    world = ros.start_world(real_time_factor=0.0)
+    assert world.models() == ['tinybot']
+    scan = ros.receive(LaserScan, '/scan')[0]
     ranges = np.array(scan.ranges)
     assert len(ranges) == 360 and scan.header.frame_id == 'base_scan'
     # Straight ahead, the yard's east wall 5 m away; every beam meets a wall or a crate.

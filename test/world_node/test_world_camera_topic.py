@@ -6,11 +6,8 @@ import os
 import numpy as np
 from PIL import Image as PillowImage
 import pytest
-from rclpy.parameter import Parameter
-from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import CameraInfo, Image
 from service_tutorial.conversions import seconds_of as seconds
-from service_tutorial.world_node.node import MujocoWorld
 from std_srvs.srv import Trigger
 
 pytestmark = pytest.mark.ros
@@ -18,22 +15,6 @@ pytestmark = pytest.mark.ros
 IMAGE_TOPIC = '/mujoco/camera/image_raw'
 INFO_TOPIC = '/mujoco/camera/camera_info'
 WIDTH, HEIGHT, FOVY = 160, 120, 60.0
-
-
-def start_world(ros, **parameters):
-    """Start the world node with parameter overrides and wait for its first /clock."""
-    overrides = [Parameter(name, value=value) for name, value in parameters.items()]
-    node = ros.add_node(MujocoWorld(parameter_overrides=overrides))
-    clock = ros.subscribe(Clock, '/clock')
-    assert ros.wait_for(lambda: clock, timeout=10.0), 'no /clock from the world'
-    return node
-
-
-def wait_sim(ros, world, duration):
-    """Wait until the world's simulation time has gone on by duration seconds."""
-    end = world.world.time + duration
-    assert ros.wait_for(lambda: world.world.time >= end, timeout=30.0 + 10.0 * duration), \
-        f'the world did not reach {end:.2f} s of simulation time'
 
 
 def png_size(path):
@@ -49,14 +30,14 @@ def png_size(path):
 
 
 def test_frames_arrive_at_the_camera_rate(ros):
-    world = start_world(ros, camera_enabled=True, camera_rate=5.0, camera_width=WIDTH,
-                        camera_height=HEIGHT, camera_fovy=FOVY)
+    world = ros.start_world(camera_enabled=True, camera_rate=5.0, camera_width=WIDTH,
+                            camera_height=HEIGHT, camera_fovy=FOVY)
     images = ros.subscribe(Image, IMAGE_TOPIC)
     infos = ros.subscribe(CameraInfo, INFO_TOPIC)
     assert ros.wait_for(lambda: images, timeout=10.0), 'no camera image within 10 s'
-    first, sim_start = len(images), world.world.time
-    wait_sim(ros, world, 2.0)
-    count, sim_time = len(images) - first, world.world.time - sim_start
+    first, sim_start = len(images), world.node.world.time
+    world.wait_sim(2.0)
+    count, sim_time = len(images) - first, world.node.world.time - sim_start
     # The rate is in Hz of simulation time, whatever pace a software renderer (no GPU) lets
     # the world keep; how fast it keeps it is the benchmark's business (its camera table).
     assert count == pytest.approx(5.0 * sim_time, abs=1.5), \
@@ -84,37 +65,37 @@ def test_frames_arrive_at_the_camera_rate(ros):
 
 
 def test_disabled_camera_has_no_topic_and_renders_nothing(ros):
-    world = start_world(ros)
+    world = ros.start_world()
     images = ros.subscribe(Image, IMAGE_TOPIC)
     # The world sees the subscriber, and half a second of simulation time goes by: five frames
     # at the default rate, had the camera been enabled.
-    assert ros.wait_for(lambda: world.count_subscribers(IMAGE_TOPIC) == 1, timeout=5.0)
-    wait_sim(ros, world, 0.5)
-    assert world.count_publishers(IMAGE_TOPIC) == 0
-    assert world.count_publishers(INFO_TOPIC) == 0
+    assert ros.wait_for(lambda: world.node.count_subscribers(IMAGE_TOPIC) == 1, timeout=5.0)
+    world.wait_sim(0.5)
+    assert world.node.count_publishers(IMAGE_TOPIC) == 0
+    assert world.node.count_publishers(INFO_TOPIC) == 0
     assert images == []
-    assert world.camera_stream.camera._renderer is None
+    assert world.node.camera_stream.camera._renderer is None
 
 
 def test_enabled_camera_renders_only_for_a_subscriber(ros):
-    world = start_world(ros, camera_enabled=True, camera_rate=20.0, camera_width=WIDTH,
-                        camera_height=HEIGHT)
-    assert ros.wait_for(lambda: world.count_publishers(IMAGE_TOPIC) == 1, timeout=5.0)
-    wait_sim(ros, world, 0.5)  # ten frames, had anyone listened
-    assert world.camera_stream.camera._renderer is None, 'rendered with nobody listening'
-    assert world.camera_stream.next_due == math.inf, 'stepping still stops for the camera'
+    world = ros.start_world(camera_enabled=True, camera_rate=20.0, camera_width=WIDTH,
+                            camera_height=HEIGHT)
+    assert ros.wait_for(lambda: world.node.count_publishers(IMAGE_TOPIC) == 1, timeout=5.0)
+    world.wait_sim(0.5)  # ten frames, had anyone listened
+    assert world.node.camera_stream.camera._renderer is None, 'rendered with nobody listening'
+    assert world.node.camera_stream.next_due == math.inf, 'stepping still stops for the camera'
     # A subscriber comes and goes: frames flow, then the camera goes quiet again.
     images = []
     subscription = ros.client_node.create_subscription(Image, IMAGE_TOPIC, images.append, 10)
     assert ros.wait_for(lambda: len(images) >= 2, timeout=10.0)
     ros.client_node.destroy_subscription(subscription)
-    assert ros.wait_for(lambda: world.camera_stream.next_due == math.inf, timeout=5.0)
+    assert ros.wait_for(lambda: world.node.camera_stream.next_due == math.inf, timeout=5.0)
 
 
 def test_save_snapshot_writes_a_png_into_the_snapshot_directory(ros, tmp_path):
     directory = tmp_path / 'snapshots'
-    start_world(ros, snapshot_directory=str(directory), camera_width=WIDTH,
-                camera_height=HEIGHT)
+    ros.start_world(snapshot_directory=str(directory), camera_width=WIDTH,
+                    camera_height=HEIGHT)
     response = ros.call(Trigger, '/mujoco/save_snapshot', Trigger.Request())
     assert response.success, response.message
     path = response.message
@@ -127,8 +108,8 @@ def test_save_snapshot_writes_a_png_into_the_snapshot_directory(ros, tmp_path):
 def test_save_snapshot_reports_a_directory_it_cannot_write(ros, tmp_path):
     blocker = tmp_path / 'a_file'
     blocker.write_text('not a directory')
-    start_world(ros, snapshot_directory=str(blocker / 'snapshots'), camera_width=WIDTH,
-                camera_height=HEIGHT)
+    ros.start_world(snapshot_directory=str(blocker / 'snapshots'), camera_width=WIDTH,
+                    camera_height=HEIGHT)
     response = ros.call(Trigger, '/mujoco/save_snapshot', Trigger.Request())
     assert not response.success
     assert 'could not save a snapshot' in response.message

@@ -5,91 +5,14 @@ import math
 from geometry_msgs.msg import Pose, Twist
 from nav_msgs.msg import Odometry
 import pytest
-from rclpy.parameter import Parameter
 from repository import read_model
-from rosgraph_msgs.msg import Clock
+from running_world import lesson_pose
 from sensor_msgs.msg import JointState
-from service_tutorial.conversions import seconds_of as seconds, yaw_of
+from service_tutorial.conversions import make_pose, seconds_of as seconds, yaw_of
 from service_tutorial.sim.world import World
-from service_tutorial.world_node.node import MujocoWorld
-from srv_interfaces.srv import DeleteModel, GetModelList, GetModelState, SetModelState
-from srv_interfaces.srv import SpawnModel
-from std_srvs.srv import Empty
+from srv_interfaces.srv import SetModelState
 
 pytestmark = pytest.mark.ros
-
-
-def lesson_pose():
-    """R2-D2's pose in the lesson: (-2, 1, 1), turned -90 degrees about z."""
-    pose = Pose()
-    pose.position.x, pose.position.y, pose.position.z = -2.0, 1.0, 1.0
-    pose.orientation.z, pose.orientation.w = -0.707, 0.707
-    return pose
-
-
-class WorldClient:
-    """The world node on an executor, and short ways to call its services."""
-
-    def __init__(self, ros, real_time_factor, parameters=()):
-        self.ros = ros
-        self.node = MujocoWorld(parameter_overrides=[
-            Parameter('real_time_factor', value=real_time_factor), *parameters])
-        # Count the ticks of the step timer: each one is a chance for the world to step.
-        self.ticks = 0
-        step = self.node.step_timer.callback
-
-        def counted_step():
-            step()
-            self.ticks += 1
-        self.node.step_timer.callback = counted_step
-        ros.add_node(self.node)
-        self.clock = ros.subscribe(Clock, '/clock')
-        assert ros.wait_for(lambda: self.clock, timeout=10.0), 'no /clock from the world'
-
-    def now(self):
-        return seconds(self.clock[-1].clock)
-
-    def wait_sim(self, duration):
-        """Wait until `duration` more seconds of simulation time have passed."""
-        end = self.now() + duration
-        assert self.ros.wait_for(lambda: self.now() >= end, timeout=60.0 + 5 * duration)
-
-    def wait_ticks(self, count):
-        """Wait until the world's step timer has fired count more times."""
-        end = self.ticks + count
-        assert self.ros.wait_for(lambda: self.ticks >= end, timeout=10.0 + 0.1 * count)
-
-    def spawn(self, name, xml, pose=None, frame='world', namespace=''):
-        request = SpawnModel.Request(model_name=name, model_xml=xml, robot_namespace=namespace,
-                                     initial_pose=pose or Pose(), reference_frame=frame)
-        return self.ros.call(SpawnModel, '/mujoco/spawn_urdf_model', request)
-
-    def delete(self, name):
-        return self.ros.call(DeleteModel, '/mujoco/delete_model',
-                             DeleteModel.Request(model_name=name))
-
-    def state(self, name, frame=''):
-        return self.ros.call(GetModelState, '/mujoco/get_model_state',
-                             GetModelState.Request(model_name=name, reference_frame=frame))
-
-    def models(self):
-        return list(self.ros.call(GetModelList, '/mujoco/get_model_list',
-                                  GetModelList.Request()).model_names)
-
-    def empty(self, service):
-        return self.ros.call(Empty, '/mujoco/' + service, Empty.Request())
-
-
-@pytest.fixture
-def fast_world(ros):
-    """Start the default world free-running, as fast as the machine can."""
-    return WorldClient(ros, real_time_factor=0.0)
-
-
-@pytest.fixture
-def real_time_world(ros):
-    """Start the default world in real time, for driving with cmd_vel at a human pace."""
-    return WorldClient(ros, real_time_factor=1.0)
 
 
 def resting_height_of_r2d2():
@@ -138,19 +61,6 @@ def test_duplicate_spawn_fails_and_delete_works_once(fast_world):
     assert "'r2d2'" in twice.status_message
 
 
-def drive(world, ros, twist, duration):
-    """Publish a Twist on /cmd_vel for `duration` s of simulation time, then a zero Twist."""
-    publisher = ros.client_node.create_publisher(Twist, '/cmd_vel', 10)
-    assert ros.wait_for(lambda: publisher.get_subscription_count() > 0)
-    end = world.now() + duration
-    while world.now() < end:
-        publisher.publish(twist)
-        world.wait_sim(0.01)
-    publisher.publish(Twist())
-    world.wait_sim(0.5)
-    ros.client_node.destroy_publisher(publisher)
-
-
 def test_cmd_vel_turns_tinybot_by_the_commanded_angle(real_time_world, ros):
     odometry = ros.subscribe(Odometry, '/odom')
     joint_states = ros.subscribe(JointState, '/joint_states')
@@ -160,7 +70,7 @@ def test_cmd_vel_turns_tinybot_by_the_commanded_angle(real_time_world, ros):
 
     twist = Twist()
     twist.angular.z = 0.5
-    drive(real_time_world, ros, twist, 2.0)
+    real_time_world.drive({'/cmd_vel': twist}, 2.0)
 
     after = real_time_world.state('tinybot')
     turned = yaw_of(after.pose.orientation) - yaw_of(before.pose.orientation)
@@ -183,7 +93,7 @@ def test_cmd_vel_drives_tinybot_forward_by_the_commanded_distance(real_time_worl
 
     twist = Twist()
     twist.linear.x = 0.2
-    drive(real_time_world, ros, twist, 2.0)
+    real_time_world.drive({'/cmd_vel': twist}, 2.0)
 
     after = real_time_world.state('tinybot').pose.position
     moved = math.hypot(after.x - before.x, after.y - before.y)
@@ -260,24 +170,19 @@ def test_state_in_a_model_frame_and_in_a_link_frame(fast_world):
 
 def test_every_model_gets_a_ros_interface_under_its_namespace(fast_world):
     node = fast_world.node
-    beside = Pose()
-    beside.position.x = 2.0
-    spawned = fast_world.spawn('tiny', read_model('tinybot'), beside, namespace='robots/tiny/')
+    spawned = fast_world.spawn('tiny', read_model('tinybot'), make_pose(2.0),
+                               namespace='robots/tiny/')
     assert spawned.success, spawned.status_message
     assert fast_world.spawn('r2d2', read_model('r2d2'), lesson_pose()).success
     assert list(node.models) == ['tinybot', 'tiny', 'r2d2']
     assert node.models['tiny'].namespace == '/robots/tiny'
     assert node.models['tinybot'].namespace == node.models['r2d2'].namespace == ''
-
-    def topics():
-        return ({publisher.topic_name for publisher in node.publishers}
-                | {subscription.topic_name for subscription in node.subscriptions})
     tiny_topics = {'/robots/tiny/cmd_vel', '/robots/tiny/odom', '/robots/tiny/joint_states'}
-    assert tiny_topics | {'/cmd_vel', '/odom', '/joint_states'} <= topics()
+    assert tiny_topics | {'/cmd_vel', '/odom', '/joint_states'} <= fast_world.topics()
     assert not node.models['r2d2'].faces, 'R2-D2 has no plugin with a ROS face'
     assert fast_world.delete('tiny').success
     assert list(node.models) == ['tinybot', 'r2d2']
-    assert not tiny_topics & topics()
+    assert not tiny_topics & fast_world.topics()
 
 
 BAD_SPAWNS = [
@@ -297,7 +202,7 @@ def bad_pose(**orientation):
     return pose
 
 
-def test_every_refusal_names_its_cause_and_changes_nothing(fast_world, ros):
+def test_every_refusal_names_its_cause_and_changes_nothing(fast_world):
     assert fast_world.spawn('r2d2', read_model('r2d2'), lesson_pose()).success
     fast_world.wait_sim(0.3)
     fast_world.empty('pause_physics')
@@ -319,10 +224,8 @@ def test_every_refusal_names_its_cause_and_changes_nothing(fast_world, ros):
         fast_world.delete('ghost'),
         fast_world.state('ghost'),
         fast_world.state('r2d2', frame='ghost'),
-        ros.call(SetModelState, '/mujoco/set_model_state',
-                 SetModelState.Request(model_name='ghost', pose=lesson_pose())),
-        ros.call(SetModelState, '/mujoco/set_model_state',
-                 SetModelState.Request(model_name='r2d2', pose=bad_pose(w=0.0))),
+        fast_world.set_state('ghost', lesson_pose()),
+        fast_world.set_state('r2d2', bad_pose(w=0.0)),
     ]
     for response in unknown:
         assert not response.success
@@ -340,9 +243,9 @@ def test_every_refusal_names_its_cause_and_changes_nothing(fast_world, ros):
 def test_clock_goes_forward_in_whole_steps_at_most_at_its_rate(ros, factor):
     # How fast each pace runs is the benchmark's business (its free_running and real_time
     # tables); here, what /clock says at either pace.
-    world = WorldClient(ros, real_time_factor=factor)
+    world = ros.start_world(real_time_factor=factor)
     world.wait_sim(1.0)
-    stamps = [seconds(msg.clock) for msg in list(world.clock)]
+    stamps = [stamp for _, stamp in list(world.clock)]
     steps = [stamp / world.node.world.timestep for stamp in stamps]
     assert all(abs(step - round(step)) < 1e-6 for step in steps), 'a stamp between two steps'
     # 250 Hz of simulation time at the most (half a step of slack), never backwards.

@@ -7,7 +7,7 @@ What the world node tells the ROS graph besides its services, through real subsc
 import logging
 import time
 
-from geometry_msgs.msg import Pose, Twist
+from geometry_msgs.msg import Twist
 from nav_msgs.msg import Odometry
 import pytest
 from rcl_interfaces.msg import Log
@@ -17,12 +17,10 @@ from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from repository import read_model
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState
-from service_tutorial.conversions import seconds_of
+from service_tutorial.conversions import make_pose, seconds_of
 from service_tutorial.world_node.log_forwarding import RclpyHandler
 from service_tutorial.world_node.node import MujocoWorld
-from srv_interfaces.srv import DeleteModel, SpawnModel
 from std_msgs.msg import String
-from std_srvs.srv import Empty
 from tf2_msgs.msg import TFMessage
 
 pytestmark = pytest.mark.ros
@@ -39,46 +37,18 @@ MAST = ('<link name="mast_link"><inertial><mass value="0.05"/><inertia ixx="1e-4
         '<limit lower="-1" upper="1" effort="1" velocity="1"/></joint></robot>')
 
 
-def start_world(ros, real_time_factor=0.0):
-    """Start the default world (tinybot) and wait for its first /clock."""
-    node = ros.add_node(MujocoWorld(parameter_overrides=[
-        Parameter('real_time_factor', value=real_time_factor)]))
-    clock = ros.subscribe(Clock, '/clock')
-    assert ros.wait_for(lambda: clock), 'no /clock from the world'
-    return node
-
-
-def spawn(ros, name, xml, namespace='', x=0.0):
-    pose = Pose()
-    pose.position.x = x
-    request = SpawnModel.Request(model_name=name, model_xml=xml, robot_namespace=namespace,
-                                 initial_pose=pose)
-    response = ros.call(SpawnModel, '/mujoco/spawn_urdf_model', request)
-    assert response.success, response.status_message
-
-
-def delete(ros, name):
-    response = ros.call(DeleteModel, '/mujoco/delete_model', DeleteModel.Request(model_name=name))
-    assert response.success, response.status_message
-
-
-def wait_sim(ros, world, duration):
-    end = world.world.time + duration
-    assert ros.wait_for(lambda: world.world.time >= end, timeout=30.0)
-
-
 def test_clock_is_transient_local_with_depth_one(ros):
-    world = start_world(ros)
-    qos = world.clock_pub.qos_profile
+    world = ros.start_world(real_time_factor=0.0)
+    qos = world.node.clock_pub.qos_profile
     assert (qos.durability, qos.reliability, qos.depth) == (
         DurabilityPolicy.TRANSIENT_LOCAL, ReliabilityPolicy.RELIABLE, 1)
 
 
 def test_a_late_subscriber_gets_the_time_within_a_second_while_paused(ros):
-    world = start_world(ros)
-    wait_sim(ros, world, 0.3)
-    ros.call(Empty, '/mujoco/pause_physics', Empty.Request())
-    paused_at = world.world.time
+    world = ros.start_world(real_time_factor=0.0)
+    world.wait_sim(0.3)
+    world.empty('pause_physics')
+    paused_at = world.node.world.time
     for qos in (LATCHED, TIME_SOURCE):  # the latched message, then the repeated one
         received = []  # (wall time, simulation time)
 
@@ -94,10 +64,10 @@ def test_a_late_subscriber_gets_the_time_within_a_second_while_paused(ros):
 
 
 def test_a_node_on_sim_time_started_during_a_pause_learns_the_time(ros):
-    world = start_world(ros)
-    wait_sim(ros, world, 0.5)
-    ros.call(Empty, '/mujoco/pause_physics', Empty.Request())
-    paused_at = world.world.time
+    world = ros.start_world(real_time_factor=0.0)
+    world.wait_sim(0.5)
+    world.empty('pause_physics')
+    paused_at = world.node.world.time
     late = ros.add_node(Node('late_joiner', parameter_overrides=[
         Parameter('use_sim_time', value=True)]))
     assert ros.wait_for(lambda: late.get_clock().now().nanoseconds > 0, timeout=1.0), \
@@ -107,7 +77,7 @@ def test_a_node_on_sim_time_started_during_a_pause_learns_the_time(ros):
 
 def test_tf_carries_odom_to_base_exactly_as_odom_says(ros):
     # Not free-running, where odom and /tf are also held to their rate in wall time.
-    world = start_world(ros, real_time_factor=2.0)
+    world = ros.start_world(real_time_factor=2.0)
     odometry = ros.subscribe(Odometry, '/odom', depth=1000)
     transforms = ros.subscribe(TFMessage, '/tf', depth=1000)
     assert ros.wait_for(lambda: odometry and transforms), 'no odom or no /tf'
@@ -115,7 +85,7 @@ def test_tf_carries_odom_to_base_exactly_as_odom_says(ros):
     twist = Twist()
     twist.linear.x, twist.angular.z = 0.3, 0.8  # an arc: x, y and yaw all change
     publisher.publish(twist)
-    wait_sim(ros, world, 1.0)
+    world.wait_sim(1.0)
 
     by_stamp = {}
     for message in list(transforms):
@@ -143,12 +113,12 @@ def test_tf_carries_odom_to_base_exactly_as_odom_says(ros):
 
 
 def test_the_transforms_of_one_turn_go_out_in_one_tf_message(ros):
-    world = start_world(ros, real_time_factor=2.0)
-    spawn(ros, 'tiny', read_model('tinybot'), namespace='tiny', x=2.0)
+    world = ros.start_world(real_time_factor=2.0)
+    world.spawn_or_fail('tiny', read_model('tinybot'), make_pose(2.0), namespace='tiny')
     transforms = ros.subscribe(TFMessage, '/tf', depth=1000)
     assert ros.wait_for(lambda: any(len(m.transforms) == 2 for m in list(transforms))), \
         'no /tf message carried both robots'
-    wait_sim(ros, world, 0.2)
+    world.wait_sim(0.2)
     for message in list(transforms):
         assert len(message.transforms) in (1, 2)  # 1: a message sent before the spawn
         stamps = {seconds_of(transform.header.stamp) for transform in message.transforms}
@@ -156,20 +126,20 @@ def test_the_transforms_of_one_turn_go_out_in_one_tf_message(ros):
 
 
 def test_a_drive_whose_block_says_no_sends_no_tf(ros):
-    world = start_world(ros)
+    world = ros.start_world(real_time_factor=0.0)
     quiet = read_model('tinybot').replace('<publish_odom_tf>true</publish_odom_tf>',
                                           '<publish_odom_tf>false</publish_odom_tf>')
-    spawn(ros, 'quiet', quiet, namespace='quiet', x=2.0)
-    assert [type(face).__name__ for face in world.models['quiet'].faces] == [
+    world.spawn_or_fail('quiet', quiet, make_pose(2.0), namespace='quiet')
+    assert [type(face).__name__ for face in world.node.models['quiet'].faces] == [
         'DriveFace', 'LaserScanFace', 'CameraFace', 'ImuFace']
-    assert 'OdomTfFace' in [type(p).__name__ for p in world.models['tinybot'].faces]
+    assert 'OdomTfFace' in [type(p).__name__ for p in world.node.models['tinybot'].faces]
 
 
 def test_robot_description_reaches_a_subscriber_that_starts_after_the_world(ros):
-    world = start_world(ros)
-    spawn(ros, 'tiny', read_model('tinybot'), namespace='robots/tiny', x=2.0)
-    spawn(ros, 'r2d2', read_model('r2d2'), x=-2.0)
-    wait_sim(ros, world, 0.1)
+    world = ros.start_world(real_time_factor=0.0)
+    world.spawn_or_fail('tiny', read_model('tinybot'), make_pose(2.0), namespace='robots/tiny')
+    world.spawn_or_fail('r2d2', read_model('r2d2'), make_pose(-2.0))
+    world.wait_sim(0.1)
     descriptions = {}
     for topic in ('/robot_description', '/robots/tiny/robot_description'):
         descriptions[topic] = []
@@ -178,15 +148,16 @@ def test_robot_description_reaches_a_subscriber_that_starts_after_the_world(ros)
     for topic, received in descriptions.items():
         assert [msg.data for msg in received] == [read_model('tinybot')], topic
     # R2-D2 has no plugin with topics, so no description; a deleted model takes its own away.
-    assert set(world.robot_descriptions) == {'tinybot', 'tiny'}
-    delete(ros, 'tiny')
-    assert '/robots/tiny/robot_description' not in {p.topic_name for p in world.publishers}
+    assert set(world.node.robot_descriptions) == {'tinybot', 'tiny'}
+    response = world.delete('tiny')
+    assert response.success, response.status_message
+    assert '/robots/tiny/robot_description' not in world.published_topics()
 
 
 def test_joint_states_cover_every_movable_joint(ros):
-    start_world(ros)
+    world = ros.start_world(real_time_factor=0.0)
     with_mast = read_model('tinybot').replace('</robot>', MAST)
-    spawn(ros, 'mast', with_mast, namespace='mast', x=2.0)
+    world.spawn_or_fail('mast', with_mast, make_pose(2.0), namespace='mast')
     joint_states = ros.subscribe(JointState, '/mast/joint_states')
     assert ros.wait_for(lambda: joint_states), 'no joint_states'
     assert sorted(joint_states[-1].name) == [
@@ -204,23 +175,24 @@ def world_log(ros):
 
 
 def test_a_spawn_and_a_delete_appear_on_rosout_once_each(ros):
-    world = start_world(ros)
+    world = ros.start_world(real_time_factor=0.0)
     log = world_log(ros)
-    assert ros.wait_for(lambda: world.count_subscribers('/rosout') > 0)
-    spawn(ros, 'r2d2', read_model('r2d2'), x=-2.0)
-    delete(ros, 'r2d2')
+    assert ros.wait_for(lambda: world.node.count_subscribers('/rosout') > 0)
+    world.spawn_or_fail('r2d2', read_model('r2d2'), make_pose(-2.0))
+    response = world.delete('r2d2')
+    assert response.success, response.status_message
     spawned = (Log.INFO, "spawned model 'r2d2' at [-2.0, 0.0, 0.0]")
     deleted = (Log.INFO, "deleted model 'r2d2'")
     assert ros.wait_for(lambda: spawned in log and deleted in log, timeout=5.0), log
-    wait_sim(ros, world, 0.1)
+    world.wait_sim(0.1)
     assert log.count(spawned) == log.count(deleted) == 1
 
 
 def test_core_logs_reach_rosout_at_their_level(ros):
-    world = start_world(ros)
+    world = ros.start_world(real_time_factor=0.0)
     log = world_log(ros)
     core = logging.getLogger('service_tutorial.world')
-    assert ros.wait_for(lambda: world.count_subscribers('/rosout') > 0)
+    assert ros.wait_for(lambda: world.node.count_subscribers('/rosout') > 0)
     for level in (logging.INFO, logging.WARNING, logging.ERROR, logging.INFO):
         core.log(level, 'level %d from the core', level)
     expected = [(Log.INFO, 'level 20 from the core'), (Log.WARN, 'level 30 from the core'),

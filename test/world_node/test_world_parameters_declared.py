@@ -8,8 +8,8 @@ import sys
 import textwrap
 
 import pytest
-from rcl_interfaces.msg import Parameter as ParameterMsg, ParameterType, ParameterValue
-from rcl_interfaces.srv import DescribeParameters, GetParameters, SetParameters
+from rcl_interfaces.msg import ParameterType
+from rcl_interfaces.srv import DescribeParameters
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 from repository import ROOT
@@ -185,31 +185,17 @@ def test_an_empty_world_and_models_without_details(rclpy_session, tmp_path):
         node.destroy_node()
 
 
-def set_parameter(ros, node, name, value):
-    """Set one parameter through the node's set_parameters service, as `ros2 param set` does."""
-    request = SetParameters.Request(parameters=[ParameterMsg(name=name, value=value)])
-    return ros.call(SetParameters, f'/{node.get_name()}/set_parameters', request).results[0]
-
-
-def get_parameter(ros, node, name):
-    request = GetParameters.Request(names=[name])
-    return ros.call(GetParameters, f'/{node.get_name()}/get_parameters', request).values[0]
-
-
 def test_an_integer_set_at_run_time_is_taken_as_a_number(ros):
     node = ros.add_node(node_with())
     values = declare_world_parameters(node)
     changes = []
     values.on_change(changes.append)
-    result = set_parameter(ros, node, 'real_time_factor',
-                           ParameterValue(type=T.PARAMETER_INTEGER, integer_value=2))
+    result = ros.set_parameter(node.get_name(), 'real_time_factor', 2)
     assert result.successful, result.reason
     assert changes == [{'real_time_factor': 2.0}] and type(values['real_time_factor']) is float
-    answer = get_parameter(ros, node, 'real_time_factor')
+    answer = ros.get_parameter(node.get_name(), 'real_time_factor')
     assert (answer.type, answer.double_value) == (T.PARAMETER_DOUBLE, 2.0)
-    result = set_parameter(ros, node, 'camera_position',
-                           ParameterValue(type=T.PARAMETER_INTEGER_ARRAY,
-                                          integer_array_value=[2, -2, 1]))
+    result = ros.set_parameter(node.get_name(), 'camera_position', [2, -2, 1])
     assert result.successful, result.reason
     assert values['camera_position'] == (2.0, -2.0, 1.0)
 
@@ -217,24 +203,18 @@ def test_an_integer_set_at_run_time_is_taken_as_a_number(ros):
 def test_a_read_only_parameter_is_not_set_at_run_time(ros):
     node = ros.add_node(node_with())
     values = declare_world_parameters(node)
-    result = set_parameter(ros, node, 'timestep',
-                           ParameterValue(type=T.PARAMETER_DOUBLE, double_value=0.001))
+    result = ros.set_parameter(node.get_name(), 'timestep', 0.001)
     assert not result.successful and 'timestep' in result.reason
-    assert values['timestep'] == 0.002 == get_parameter(ros, node, 'timestep').double_value
+    answer = ros.get_parameter(node.get_name(), 'timestep')
+    assert values['timestep'] == 0.002 == answer.double_value
 
 
 @pytest.mark.parametrize('name, value, words', [
-    ('clock_publish_rate', ParameterValue(type=T.PARAMETER_INTEGER, integer_value=0),
-     ['clock_publish_rate:=0.0', '> 0.0']),
-    ('real_time_factor', ParameterValue(type=T.PARAMETER_DOUBLE, double_value=-1.0),
-     ['real_time_factor', '-1.0']),
-    ('real_time_factor', ParameterValue(type=T.PARAMETER_STRING, string_value='fast'),
-     ['type']),
-    ('camera_width', ParameterValue(type=T.PARAMETER_INTEGER, integer_value=0),
-     ['camera_width', '0']),
-    ('camera_look_at', ParameterValue(type=T.PARAMETER_DOUBLE_ARRAY,
-                                      double_array_value=[1.0, -1.8, 3.0]),
-     ['camera_position', 'camera_look_at', 'no view']),
+    ('clock_publish_rate', 0, ['clock_publish_rate:=0.0', '> 0.0']),  # an integer
+    ('real_time_factor', -1.0, ['real_time_factor', '-1.0']),
+    ('real_time_factor', 'fast', ['type']),
+    ('camera_width', 0, ['camera_width', '0']),
+    ('camera_look_at', [1.0, -1.8, 3.0], ['camera_position', 'camera_look_at', 'no view']),
 ])
 def test_a_bad_run_time_value_is_refused_with_a_reason_and_the_node_goes_on(
         ros, name, value, words):
@@ -243,15 +223,14 @@ def test_a_bad_run_time_value_is_refused_with_a_reason_and_the_node_goes_on(
     changes = []
     values.on_change(changes.append)
     before = values[name]
-    result = set_parameter(ros, node, name, value)
+    result = ros.set_parameter(node.get_name(), name, value)
     assert not result.successful
     for word in words:
         assert word in result.reason
     assert values[name] == before and not changes
     # The node still answers, and takes a good value.
-    assert get_parameter(ros, node, 'paused').type == T.PARAMETER_BOOL
-    result = set_parameter(ros, node, 'paused',
-                           ParameterValue(type=T.PARAMETER_BOOL, bool_value=True))
+    assert ros.get_parameter(node.get_name(), 'paused').type == T.PARAMETER_BOOL
+    result = ros.set_parameter(node.get_name(), 'paused', True)
     assert result.successful and changes == [{'paused': True}]
 
 
@@ -259,10 +238,8 @@ RUN_TIME = sorted(name for name, (_, _, read_only) in INTENDED.items() if not re
 
 
 def wrong_type_value(name):
-    """Return a ParameterValue of a type the parameter never takes."""
-    if INTENDED[name][0] == T.PARAMETER_STRING:
-        return ParameterValue(type=T.PARAMETER_INTEGER, integer_value=42)
-    return ParameterValue(type=T.PARAMETER_STRING, string_value='fast')
+    """Return a value of a type the parameter never takes."""
+    return 42 if INTENDED[name][0] == T.PARAMETER_STRING else 'fast'
 
 
 @pytest.mark.parametrize('name', RUN_TIME)
@@ -276,14 +253,13 @@ def test_every_run_time_parameter_refuses_a_wrong_type_and_a_value_out_of_range(
     refusals = [(wrong_type_value(name), 'Wrong parameter type')]
     if name in OUT_OF_RANGE:
         text, _ = OUT_OF_RANGE[name]
-        refusals.append((Parameter(name, value=yaml.safe_load(text)).get_parameter_value(),
-                         name))
+        refusals.append((yaml.safe_load(text), name))
     for value, words in refusals:
-        result = set_parameter(ros, node, name, value)
+        result = ros.set_parameter(node.get_name(), name, value)
         assert not result.successful, f'{name} took {value}'
         assert words in result.reason, result.reason
     assert values[name] == before and not changes
-    assert get_parameter(ros, node, 'paused').type == T.PARAMETER_BOOL
+    assert ros.get_parameter(node.get_name(), 'paused').type == T.PARAMETER_BOOL
 
 
 def test_on_change_follows_the_names_it_was_given(rclpy_session):

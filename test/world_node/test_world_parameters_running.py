@@ -12,22 +12,17 @@ import os
 import shutil
 import subprocess
 import sys
-import time
 
 from geometry_msgs.msg import Twist
 from nav_msgs.msg import Odometry
 from PIL import Image as PillowImage
 import pytest
 from rcl_interfaces.msg import Parameter as ParameterMsg, ParameterType, ParameterValue
-from rcl_interfaces.srv import GetParameters, SetParameters
-from rclpy.parameter import Parameter
-from rosgraph_msgs.msg import Clock
+from rcl_interfaces.srv import SetParameters
 from sensor_msgs.msg import CameraInfo, Image
 from service_tutorial.conversions import seconds_of
-from service_tutorial.world_node.node import MujocoWorld
 from service_tutorial.world_node.parameters import WORLD_PARAMETERS
-from srv_interfaces.srv import GetModelList, GetModelState
-from std_srvs.srv import Empty, Trigger
+from std_srvs.srv import Trigger
 from test_world_parameters_declared import OUT_OF_RANGE, WRONG_TYPE
 
 pytestmark = pytest.mark.ros
@@ -91,71 +86,24 @@ def test_a_bad_value_at_start_up_ends_the_world_with_one_line_and_status_2(
 # --- the running world ---------------------------------------------------------------------
 
 
-class World:
-    """A world node on an executor, its /clock with wall receive times, and its parameters."""
+def measured_pace(world, wall_seconds=1.5):
+    """Measure simulated seconds per wall second over the next wall_seconds on /clock."""
+    start = len(world.clock)
+    assert world.ros.wait_for(lambda: len(world.clock) > start)
+    first = world.clock[start]
+    assert world.ros.wait_for(lambda: world.clock[-1][0] - first[0] >= wall_seconds,
+                              timeout=wall_seconds + 10.0), '/clock stopped'
+    last = world.clock[-1]
+    return (last[1] - first[1]) / (last[0] - first[0])
 
-    def __init__(self, ros, **parameters):
-        self.ros = ros
-        overrides = [Parameter(name, value=value) for name, value in parameters.items()]
-        self.node = MujocoWorld(parameter_overrides=overrides)
-        # Count the ticks of the step timer: each one is a chance for the world to step.
-        self.ticks = 0
-        step = self.node.step_timer.callback
 
-        def counted_step():
-            step()
-            self.ticks += 1
-        self.node.step_timer.callback = counted_step
-        ros.add_node(self.node)
-        self.clock = []  # (wall time received, simulation time)
-        ros.client_node.create_subscription(
-            Clock, '/clock', lambda msg: self.clock.append((time.monotonic(),
-                                                            seconds_of(msg.clock))), 100)
-        assert ros.wait_for(lambda: self.clock), 'no /clock from the world'
-
-    def now(self):
-        return self.clock[-1][1]
-
-    def wait_sim(self, duration, timeout=30.0):
-        end = self.now() + duration
-        assert self.ros.wait_for(lambda: self.now() >= end, timeout=timeout), \
-            f'simulation time did not reach {end:.3f} s'
-
-    def pace(self, wall_seconds=1.5):
-        """Measure simulated seconds per wall second over the next wall_seconds on /clock."""
-        start = len(self.clock)
-        assert self.ros.wait_for(lambda: len(self.clock) > start)
-        first = self.clock[start]
-        assert self.ros.wait_for(lambda: self.clock[-1][0] - first[0] >= wall_seconds,
-                                 timeout=wall_seconds + 10.0), '/clock stopped'
-        last = self.clock[-1]
-        return (last[1] - first[1]) / (last[0] - first[0])
-
-    def wait_ticks(self, count):
-        end = self.ticks + count
-        assert self.ros.wait_for(lambda: self.ticks >= end, timeout=10.0)
-
-    def set_parameter(self, name, value):
-        """Set one parameter through the set_parameters service; return the result."""
-        request = SetParameters.Request(parameters=[
-            ParameterMsg(name=name, value=Parameter(name, value=value).get_parameter_value())])
-        return self.ros.call(SetParameters, '/mujoco/set_parameters', request).results[0]
-
-    def get(self, name):
-        request = GetParameters.Request(names=[name])
-        return self.ros.call(GetParameters, '/mujoco/get_parameters', request).values[0]
-
-    def stamp(self, model='tinybot'):
-        response = self.ros.call(GetModelState, '/mujoco/get_model_state',
-                                 GetModelState.Request(model_name=model))
-        return seconds_of(response.header.stamp)
-
-    def empty(self, service):
-        return self.ros.call(Empty, '/mujoco/' + service, Empty.Request())
+def stamp(world):
+    """Return the simulation time of tinybot's state, as get_model_state answers it."""
+    return seconds_of(world.state('tinybot').header.stamp)
 
 
 def test_every_writable_parameter_is_followed_by_the_running_world(ros):
-    world = World(ros)
+    world = ros.start_world()
     assert world.node.parameters.unwatched() == []
 
 
@@ -164,19 +112,19 @@ def test_every_writable_parameter_is_followed_by_the_running_world(ros):
     (0, 5.0, math.inf),   # free-running: far faster than real time, as fast as it can
 ])
 def test_real_time_factor_given_at_start_up_sets_the_pace(ros, factor, low, high):
-    world = World(ros, real_time_factor=factor)
-    pace = world.pace()
+    world = ros.start_world(real_time_factor=factor)
+    pace = measured_pace(world)
     print(f'\nreal_time_factor {factor}: {pace:.2f} simulated seconds per wall second')
     assert low <= pace <= high
 
 
 def test_real_time_factor_set_at_run_time_changes_the_pace_at_once(ros):
-    world = World(ros, real_time_factor=1.0)
+    world = ros.start_world(real_time_factor=1.0)
     paces = {}
     for factor in (2.0, 0.0, 1.0):
-        result = world.set_parameter('real_time_factor', factor)
+        result = ros.set_parameter('mujoco', 'real_time_factor', factor)
         assert result.successful, result.reason
-        paces[factor] = world.pace()
+        paces[factor] = measured_pace(world)
     print(f'\nmeasured paces after each set: {paces}')
     assert 1.8 <= paces[2.0] <= 2.2
     assert paces[0.0] >= 5.0
@@ -184,22 +132,22 @@ def test_real_time_factor_set_at_run_time_changes_the_pace_at_once(ros):
 
 
 def test_paused_follows_the_parameter_and_the_services_both_ways(ros):
-    world = World(ros, real_time_factor=0.0)
-    assert world.set_parameter('paused', True).successful
-    paused_at = world.stamp()
+    world = ros.start_world(real_time_factor=0.0)
+    assert ros.set_parameter('mujoco', 'paused', True).successful
+    paused_at = stamp(world)
     world.wait_ticks(10)  # ten chances to step, every one of them passed up
-    assert world.stamp() == paused_at and world.node.world.paused
-    assert world.set_parameter('paused', False).successful
+    assert stamp(world) == paused_at and world.node.world.paused
+    assert ros.set_parameter('mujoco', 'paused', False).successful
     world.wait_sim(0.2)
-    assert world.stamp() > paused_at
+    assert stamp(world) > paused_at
 
     world.empty('pause_physics')
-    assert world.get('paused').bool_value is True
-    paused_at = world.stamp()
+    assert ros.get_parameter('mujoco', 'paused').bool_value is True
+    paused_at = stamp(world)
     world.empty('unpause_physics')
-    assert world.get('paused').bool_value is False
+    assert ros.get_parameter('mujoco', 'paused').bool_value is False
     world.wait_sim(0.2)
-    assert world.stamp() > paused_at
+    assert stamp(world) > paused_at
 
 
 @pytest.mark.parametrize('name, value, words', [
@@ -211,25 +159,24 @@ def test_paused_follows_the_parameter_and_the_services_both_ways(ros):
 ])
 def test_a_bad_value_at_run_time_is_refused_with_a_reason_and_the_world_goes_on(
         ros, name, value, words):
-    world = World(ros, real_time_factor=0.0)
+    world = ros.start_world(real_time_factor=0.0)
     before = world.node.parameters[name]
-    result = world.set_parameter(name, value)
+    result = ros.set_parameter('mujoco', name, value)
     assert not result.successful
     for word in words:
         assert word in result.reason, result.reason
     assert world.node.parameters[name] == before
     world.wait_sim(0.2)
-    assert ros.call(GetModelList, '/mujoco/get_model_list',
-                    GetModelList.Request()).model_names == ['tinybot']
+    assert world.models() == ['tinybot']
 
 
 def test_publish_rates_set_at_run_time_space_the_messages_out(ros):
     # Not free-running, where every stream is also held to its rate in wall time.
-    world = World(ros, real_time_factor=4.0)
+    world = ros.start_world(real_time_factor=4.0)
     odometry = ros.subscribe(Odometry, '/odom')
     assert ros.wait_for(lambda: odometry), 'no odom'
     for name, rate in (('clock_publish_rate', 50), ('odom_publish_rate', 10.0)):
-        assert world.set_parameter(name, rate).successful
+        assert ros.set_parameter('mujoco', name, rate).successful
     clock_from, odom_from = len(world.clock), len(odometry)
     world.wait_sim(1.0)
     clock = [sim for _, sim in world.clock[clock_from + 1:]]
@@ -250,64 +197,62 @@ def spin_tinybot(world):
 
 
 def turning_rate(world):
-    response = world.ros.call(GetModelState, '/mujoco/get_model_state',
-                              GetModelState.Request(model_name='tinybot'))
-    return response.twist.angular.z
+    return world.state('tinybot').twist.angular.z
 
 
 def test_cmd_vel_timeout_set_at_run_time_applies_to_the_command_in_force(ros):
-    world = World(ros, real_time_factor=0.0)
-    assert world.set_parameter('cmd_vel_timeout', 0).successful  # an integer: never lapse
+    world = ros.start_world(real_time_factor=0.0)
+    assert ros.set_parameter('mujoco', 'cmd_vel_timeout', 0).successful  # an integer: never lapse
     assert world.node.parameters['cmd_vel_timeout'] == 0.0
     spin_tinybot(world)
     assert ros.wait_for(lambda: turning_rate(world) > 0.5), 'tinybot did not start turning'
     world.wait_sim(1.0)
     assert turning_rate(world) > 0.5, 'the command lapsed although cmd_vel_timeout is 0'
     # The command came over a simulated second ago: a timeout of 0.2 s ends it at once.
-    assert world.set_parameter('cmd_vel_timeout', 0.2).successful
+    assert ros.set_parameter('mujoco', 'cmd_vel_timeout', 0.2).successful
     world.wait_sim(0.5)
     assert abs(turning_rate(world)) < 0.05, 'tinybot kept turning after its command lapsed'
 
 
 def test_camera_settings_set_at_run_time_take_effect(ros, tmp_path):
-    world = World(ros, real_time_factor=0.0)
+    world = ros.start_world(real_time_factor=0.0)
     topics = {name for name, _ in world.node.get_topic_names_and_types()}
     assert '/mujoco/camera/image_raw' not in topics
     images = ros.subscribe(Image, '/mujoco/camera/image_raw')
     infos = ros.subscribe(CameraInfo, '/mujoco/camera/camera_info')
     for name, value in (('camera_width', 64), ('camera_height', 48), ('camera_rate', 20),
                         ('camera_enabled', True)):
-        assert world.set_parameter(name, value).successful, name
+        assert ros.set_parameter('mujoco', name, value).successful, name
     assert ros.wait_for(lambda: images and infos, timeout=20.0), 'no image after enabling'
     assert (images[-1].width, images[-1].height) == (64, 48)
 
     focal = infos[-1].k[0]
-    assert world.set_parameter('camera_fovy', 30.0).successful
-    assert world.set_parameter('camera_width', 80).successful
+    assert ros.set_parameter('mujoco', 'camera_fovy', 30.0).successful
+    assert ros.set_parameter('mujoco', 'camera_width', 80).successful
     assert ros.wait_for(lambda: images[-1].width == 80 and infos[-1].k[0] > 1.5 * focal,
                         timeout=20.0), 'size and field of view did not change'
     count = len(images)
-    assert world.set_parameter('camera_position', [0.0, -3.0, 1.0]).successful
+    assert ros.set_parameter('mujoco', 'camera_position', [0.0, -3.0, 1.0]).successful
     assert ros.wait_for(lambda: len(images) > count + 1, timeout=20.0)
     assert world.node.camera_stream.camera.position.tolist() == [0.0, -3.0, 1.0]
 
-    assert world.set_parameter('snapshot_directory', str(tmp_path)).successful
+    assert ros.set_parameter('mujoco', 'snapshot_directory', str(tmp_path)).successful
     answer = ros.call(Trigger, '/mujoco/save_snapshot', Trigger.Request(), timeout=30.0)
     assert answer.success and os.path.dirname(answer.message) == str(tmp_path), answer.message
     with PillowImage.open(answer.message) as png:
         assert png.size == (80, 48)
 
-    assert world.set_parameter('camera_enabled', False).successful
-    assert '/mujoco/camera/image_raw' not in {pub.topic_name for pub in world.node.publishers}
+    assert ros.set_parameter('mujoco', 'camera_enabled', False).successful
+    assert '/mujoco/camera/image_raw' not in world.published_topics()
     assert world.node.camera_stream.next_due == math.inf
 
 
 def test_an_integer_set_where_a_number_is_expected_is_taken(ros):
-    world = World(ros, real_time_factor=0.0)
+    world = ros.start_world(real_time_factor=0.0)
     request = SetParameters.Request(parameters=[ParameterMsg(
         name='real_time_factor', value=ParameterValue(type=T.PARAMETER_INTEGER,
                                                       integer_value=2))])
     result = ros.call(SetParameters, '/mujoco/set_parameters', request).results[0]
     assert result.successful, result.reason
-    assert world.get('real_time_factor').double_value == 2.0
+    assert ros.get_parameter('mujoco', 'real_time_factor').double_value == 2.0
     assert world.node.pacer.real_time_factor == 2.0
