@@ -1,16 +1,23 @@
-"""The package's shape: files and classes of a readable size, and no ROS in the simulation."""
+"""
+The package's shape: files and classes of a readable size, and imports that go one way only.
+
+The simulation imports nothing of ROS and nothing of the package outside sim/; the world node
+imports neither the lesson nor the pictures; the plugins import nothing of the URDF builder,
+which imports them. Each rule has a self-test that shows it catches a violation.
+"""
 
 import ast
 import os
 
+import pytest
 from repository import ROOT
 
 PACKAGE = os.path.join(ROOT, 'service_tutorial')
-SIMULATION = os.path.join(PACKAGE, 'sim')
 MAX_FILE_LINES = 500
 MAX_CLASS_LINES = 350
-# Top-level modules that are ROS, whatever the package: client libraries, interfaces, tools.
-ROS_MODULES = ('rclpy', 'rcl_interfaces', 'srv_interfaces', 'rosidl_runtime_py', 'rmw')
+# What belongs to ROS, by a module's top-level package: client libraries, interfaces, tools.
+ROS_MODULES = ('rclpy', 'rcl_interfaces', 'srv_interfaces', 'rosidl_runtime_py', 'rmw',
+               'rpyutils', 'tf2_ros', 'message_filters')
 ROS_PREFIXES = ('ament_', 'launch', 'rosidl_')
 ROS_SUFFIXES = ('_msgs', '_srvs', '_interfaces')
 
@@ -66,10 +73,50 @@ def is_ros(module):
     return top in ROS_MODULES or top.startswith(ROS_PREFIXES) or top.endswith(ROS_SUFFIXES)
 
 
+def within(module, *packages):
+    """Tell whether a module is one of these packages or lies inside one of them."""
+    return any(module == package or module.startswith(package + '.') for package in packages)
+
+
 def is_ros_side(module):
     """Tell whether a module is ROS, or a module of this package outside the simulation."""
-    parts = module.split('.')
-    return is_ros(module) or (parts[0] == 'service_tutorial' and parts[1:2] != ['sim'])
+    return is_ros(module) or (within(module, 'service_tutorial')
+                              and not within(module, 'service_tutorial.sim'))
+
+
+def is_lesson_or_pictures(module):
+    return within(module, 'service_tutorial.lesson', 'service_tutorial.pictures')
+
+
+def is_urdf_builder(module):
+    return within(module, 'service_tutorial.sim.urdf')
+
+
+# Which folder of the package may not import what: (folder, forbidden(module), what it is).
+IMPORT_RULES = {
+    'sim': ('sim', is_ros_side, 'ROS, or the package outside sim/'),
+    'world_node': ('world_node', is_lesson_or_pictures, 'the lesson or the pictures'),
+    'plugins': (os.path.join('sim', 'plugins'), is_urdf_builder, 'the URDF builder, sim/urdf/'),
+}
+# For each rule, a module of its folder that breaks it and one that keeps it.
+IMPORT_RULE_EXAMPLES = {
+    'sim': ('service_tutorial.sim.urdf',
+            'from ...world_node import pacing\n',
+            'from .. import frames\nfrom ..plugins import diff_drive\nimport numpy\n'),
+    'world_node': ('service_tutorial.world_node.faces',
+                   'def snapshot():\n    from ...pictures.image_files import write_png\n',
+                   'from ...sim.world import World\nfrom service_tutorial import conversions\n'),
+    'plugins': ('service_tutorial.sim.plugins',
+                'from ..urdf.hardened_xml import parse_numbers\n',
+                'from ..description import UrdfError\nfrom service_tutorial.sim import frames\n'),
+}
+
+
+def offenders(rule, tree, package):
+    """Return the (line, module) a module imports against a rule."""
+    _, forbidden, _ = IMPORT_RULES[rule]
+    return [(line, module) for line, module in imported_modules(tree, package)
+            if forbidden(module)]
 
 
 def test_the_import_walk_finds_ros_wherever_it_is_imported():
@@ -91,39 +138,50 @@ def test_the_import_walk_finds_ros_wherever_it_is_imported():
         'service_tutorial.conversions'])
     assert not is_ros_side('service_tutorial.sim')
     assert is_ros_side('service_tutorial.world_node.pacing')
-    for module in ('std_srvs.srv', 'srv_interfaces.srv', 'rcl_interfaces.msg',
-                   'launch_ros.actions', 'builtin_interfaces.msg', 'rosgraph_msgs.msg'):
+    assert is_ros_side('service_tutorial.simulator'), 'a sibling is not inside sim/'
+    for module in ('std_srvs.srv', 'srv_interfaces.srv', 'rcl_interfaces.msg', 'std_msgs.msg',
+                   'launch_ros.actions', 'builtin_interfaces.msg', 'rosgraph_msgs.msg',
+                   'rosidl_parser', 'rpyutils', 'tf2_ros', 'message_filters'):
         assert is_ros(module), module
     for module in ('mujoco', 'numpy', 'yourdfpy', 'lxml.etree', 'service_tutorial.sim.world'):
         assert not is_ros(module), module
 
 
-def test_the_simulation_imports_nothing_of_ros():
-    files = python_files(SIMULATION)
-    assert files, f'no Python files under {relative(SIMULATION)}'
-    offenders = [f'{relative(path)}:{line}: {module}' for path in files
-                 for line, module in imported_modules(parse(path), module_package(path))
-                 if is_ros_side(module)]
-    assert not offenders, 'ROS imported by the simulation:\n' + '\n'.join(offenders)
+@pytest.mark.parametrize('rule', sorted(IMPORT_RULES))
+def test_each_import_rule_catches_a_module_that_breaks_it(rule):
+    package, breaking, keeping = IMPORT_RULE_EXAMPLES[rule]
+    assert [line for line, _ in offenders(rule, ast.parse(breaking), package)] == [
+        len(breaking.splitlines())]
+    assert offenders(rule, ast.parse(keeping), package) == []
+
+
+@pytest.mark.parametrize('rule', sorted(IMPORT_RULES))
+def test_imports_go_one_way(rule):
+    folder, _, what = IMPORT_RULES[rule]
+    files = python_files(os.path.join(PACKAGE, folder))
+    assert files, f'no Python files under {relative(os.path.join(PACKAGE, folder))}'
+    found = [f'{relative(path)}:{line}: {module}' for path in files
+             for line, module in offenders(rule, parse(path), module_package(path))]
+    assert not found, f'{folder}/ imports {what}:\n' + '\n'.join(found)
 
 
 def test_no_file_is_longer_than_500_lines():
-    offenders = []
+    too_long = []
     for path in python_files(PACKAGE):
         with open(path, encoding='utf-8') as source:
             lines = len(source.read().splitlines())
         if lines > MAX_FILE_LINES:
-            offenders.append(f'{relative(path)}: {lines} lines')
-    assert not offenders, f'over {MAX_FILE_LINES} lines:\n' + '\n'.join(offenders)
+            too_long.append(f'{relative(path)}: {lines} lines')
+    assert not too_long, f'over {MAX_FILE_LINES} lines:\n' + '\n'.join(too_long)
 
 
 def test_no_class_is_longer_than_350_lines():
-    offenders = []
+    too_long = []
     for path in python_files(PACKAGE):
         for node in ast.walk(parse(path)):
             if isinstance(node, ast.ClassDef):
                 lines = node.end_lineno - node.lineno + 1
                 if lines > MAX_CLASS_LINES:
-                    offenders.append(f'{relative(path)}:{node.lineno}: class {node.name}, '
-                                     f'{lines} lines')
-    assert not offenders, f'over {MAX_CLASS_LINES} lines:\n' + '\n'.join(offenders)
+                    too_long.append(f'{relative(path)}:{node.lineno}: class {node.name}, '
+                                    f'{lines} lines')
+    assert not too_long, f'over {MAX_CLASS_LINES} lines:\n' + '\n'.join(too_long)
