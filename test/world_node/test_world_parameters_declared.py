@@ -1,8 +1,17 @@
-"""The world node's parameters: descriptors, start-up checks and run-time sets over ROS."""
+"""
+The world node's parameters as declared: types, ranges, descriptions and the values refused.
 
+No world runs here. The parameters are declared on a plain node, as the world node declares
+them, and set over ROS as `ros2 param set` does; bad values at start-up are also given to the
+installed `mujoco_world`, one process per value, a few at a time, each of which must end at
+once. What a value does to a running world is test_world_parameters_running's part.
+"""
+
+from concurrent.futures import ThreadPoolExecutor
 import itertools
 import math
 import os
+import shutil
 import subprocess
 import sys
 import textwrap
@@ -14,7 +23,7 @@ from rclpy.node import Node
 from rclpy.parameter import Parameter
 from repository import ROOT
 from service_tutorial.world_node.parameters import declare_world_parameters, default_parameters
-from service_tutorial.world_node.parameters import ParameterError, run_or_exit
+from service_tutorial.world_node.parameters import run_or_exit, WORLD_PARAMETERS
 import yaml
 
 pytestmark = pytest.mark.ros
@@ -79,17 +88,6 @@ def node_with(*arguments, **kwargs):
     return Node(next(_names), cli_args=['--ros-args', *arguments], **kwargs)
 
 
-def start_up_error(*arguments):
-    """Declare the world parameters with these arguments and return the error's message."""
-    node = node_with(*arguments)
-    try:
-        with pytest.raises(ParameterError) as caught:
-            declare_world_parameters(node)
-    finally:
-        node.destroy_node()
-    return str(caught.value)
-
-
 def test_config_world_yaml_documents_exactly_the_code_defaults():
     with open(os.path.join(ROOT, 'config', 'world.yaml')) as config_file:
         (node,) = yaml.safe_load(config_file).values()  # mujoco, or a wildcard such as /**
@@ -119,20 +117,60 @@ def test_every_descriptor_as_intended(ros):
     assert listed - {'use_sim_time', 'start_type_description_service'} == set(INTENDED)
 
 
-@pytest.mark.parametrize('name', sorted(WRONG_TYPE))
-def test_a_wrong_type_at_start_up_is_one_line_naming_it(rclpy_session, name):
-    message = start_up_error('-p', f'{name}:={WRONG_TYPE[name]}')
-    assert '\n' not in message
-    assert message.startswith(f'parameter {name}:=') and 'has the wrong type' in message
-    assert 'expected ' in message
+NAMES = [spec.name for spec in WORLD_PARAMETERS]
+# Bad values checked at start-up: each parameter's wrong type, and its out-of-range value
+# where it has one (booleans and the snapshot directory take every value of their type).
+START_UP_CASES = [(name, 'wrong type') for name in NAMES] + [
+    (name, 'out of range') for name in NAMES if name in OUT_OF_RANGE]
+# Processes started at once: each spends most of its second importing, on one core.
+PARALLEL_PROCESSES = 4
 
 
-@pytest.mark.parametrize('name', sorted(OUT_OF_RANGE))
-def test_a_value_out_of_range_at_start_up_is_one_line_naming_it(rclpy_session, name):
-    given, written = OUT_OF_RANGE[name]
-    message = start_up_error('-p', f'{name}:={given}')
-    assert '\n' not in message
-    assert f'{name}:=' in message and written in message and 'expected ' in message
+def world_command():
+    """Return the command line that starts the installed world node, as `ros2 run` does."""
+    executable = shutil.which('mujoco_world')
+    return [executable] if executable else [
+        sys.executable, '-m', 'service_tutorial.world_node.node']
+
+
+def run_world(argument):
+    """Start the world with one -p argument; return (exit status, stderr) once it ends."""
+    try:
+        run = subprocess.run([*world_command(), '--ros-args', '-p', argument],
+                             capture_output=True, text=True, timeout=60)
+    except subprocess.TimeoutExpired:
+        return None, f'still running after 60 s with -p {argument}'
+    return run.returncode, run.stderr
+
+
+@pytest.fixture(scope='module')
+def start_up_runs():
+    """Run the world once per bad start-up value, a few at a time; results by case."""
+    def argument(case):
+        name, kind = case
+        value = WRONG_TYPE[name] if kind == 'wrong type' else OUT_OF_RANGE[name][0]
+        return f'{name}:={value}'
+    missing = [name for name in NAMES if name not in WRONG_TYPE]
+    assert not missing, f'no wrong-type value in WRONG_TYPE: {missing}'
+    with ThreadPoolExecutor(PARALLEL_PROCESSES) as pool:
+        results = pool.map(run_world, map(argument, START_UP_CASES))
+        return dict(zip(START_UP_CASES, results))
+
+
+@pytest.mark.parametrize('name, kind', START_UP_CASES)
+def test_a_bad_value_at_start_up_ends_the_world_with_one_line_naming_it_and_status_2(
+        start_up_runs, name, kind):
+    status, stderr = start_up_runs[name, kind]
+    lines = stderr.strip().splitlines()
+    assert status == 2 and len(lines) == 1, stderr
+    line = lines[0]
+    assert line.startswith('mujoco_world: parameter') and f'{name}:=' in line, line
+    assert 'expected ' in line, 'the line must say what is allowed'
+    if kind == 'wrong type':
+        assert line.startswith(f'mujoco_world: parameter {name}:=')
+        assert 'has the wrong type' in line
+    else:  # out of range, or (model details) not one per model
+        assert OUT_OF_RANGE[name][1] in line
 
 
 def test_defaults_need_no_arguments(rclpy_session):
