@@ -1,11 +1,9 @@
 """Spawning, deleting and resetting through the world's services, as functions and programs."""
 
 import math
-import os
-import subprocess
 
-from ament_index_python.packages import get_package_prefix
 from geometry_msgs.msg import Pose
+from programs import run_program
 import pytest
 from rclpy.node import Node
 from service_tutorial.conversions import make_pose, yaw_of
@@ -14,13 +12,6 @@ from service_tutorial.lesson.model_services import reset_simulation, response_te
 from service_tutorial.lesson.model_services import ServiceUnavailableError, spawn_model
 from srv_interfaces.srv import SpawnModel
 from std_srvs.srv import Empty
-
-LIB = os.path.join(get_package_prefix('service_tutorial'), 'lib', 'service_tutorial')
-
-
-def run(executable, *args):
-    return subprocess.run([os.path.join(LIB, executable), *args], capture_output=True,
-                          text=True, timeout=30)
 
 
 @pytest.mark.parametrize('yaw', [0.0, 0.3, -math.pi / 2, 3.0])
@@ -56,7 +47,7 @@ def test_spawn_model_wants_exactly_one_model_description():
 def test_lesson_programs_spawn_delete_and_reset(ros):
     world = ros.start_world()
 
-    spawned = run('spawn_model_client')
+    spawned = run_program('spawn_model_client')
 
     assert spawned.returncode == 0, spawned.stderr
     assert spawned.stdout.startswith('success: True\nstatus_message: "')
@@ -66,15 +57,15 @@ def test_lesson_programs_spawn_delete_and_reset(ros):
     assert state.pose.position.y == pytest.approx(1.0, abs=0.02)
     assert math.degrees(yaw_of(state.pose.orientation)) == pytest.approx(-90.0, abs=1.0)
 
-    deleted = run('delete_model_client', 'r2d2')
+    deleted = run_program('delete_model_client', 'r2d2')
 
     assert deleted.returncode == 0, deleted.stderr
     assert 'success: True' in deleted.stdout
     assert world.models() == ['tinybot']
-    assert run('delete_model_client', 'r2d2').returncode == 1
+    assert run_program('delete_model_client', 'r2d2').returncode == 1
 
     assert ros.wait_for(lambda: world.now() >= 1.0)
-    reset = run('reset_simulation_client')
+    reset = run_program('reset_simulation_client')
 
     assert reset.returncode == 0, reset.stderr
     assert ros.wait_for(lambda: world.now() < 1.0)
@@ -128,7 +119,8 @@ def test_a_missing_service_raises_an_error_naming_it(rclpy_session):
     finally:
         node.destroy_node()
 
-    missing = run('delete_model_client', '--timeout', '0.5', '--ros-args', '-r', '__ns:=/nowhere')
+    missing = run_program('delete_model_client', '--timeout', '0.5',
+                          '--ros-args', '-r', '__ns:=/nowhere')
 
     assert missing.returncode == 1
     assert 'service /nowhere/mujoco/delete_model did not appear within 0.5 s' in missing.stderr

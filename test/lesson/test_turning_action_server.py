@@ -5,8 +5,8 @@ import os
 
 from action_msgs.msg import GoalStatus
 from action_msgs.srv import CancelGoal
-from ament_index_python.packages import get_package_prefix
 from geometry_msgs.msg import Twist
+from programs import program_path
 import pytest
 from rcl_interfaces.srv import DescribeParameters
 from rclpy.action import ActionClient
@@ -308,7 +308,7 @@ def test_a_goal_without_odometry_is_aborted_with_the_reason(ros):
 
 def test_both_programs_are_executables_of_the_package():
     # What `ros2 pkg executables service_tutorial` lists: the executable files in lib/<package>.
-    directory = os.path.join(get_package_prefix('service_tutorial'), 'lib', 'service_tutorial')
+    directory = os.path.dirname(program_path('robot_turning_action_server'))
     executables = {name for name in os.listdir(directory)
                    if os.access(os.path.join(directory, name), os.X_OK)}
     assert {'robot_turning_action_server', 'robot_turning_action_client'} <= executables

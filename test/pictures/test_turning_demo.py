@@ -6,18 +6,14 @@ import re
 import signal
 import subprocess
 
-from ament_index_python.packages import get_package_prefix
+from programs import program_path, run_program
 import pytest
-
-DEMO = os.path.join(get_package_prefix('service_tutorial'), 'lib', 'service_tutorial',
-                    'turning_demo')
 
 pytestmark = pytest.mark.ros
 
 
 def run_demo(*args, log_dir):
-    return subprocess.run([DEMO, '--log-dir', str(log_dir), *args], capture_output=True,
-                          text=True, timeout=90)
+    return run_program('turning_demo', '--log-dir', str(log_dir), *args, timeout=90)
 
 
 def child_pids(output):
@@ -73,7 +69,8 @@ def test_a_failing_step_stops_the_demo_with_a_clear_message(tmp_path):
 
 
 def test_ctrl_c_mid_demo_stops_the_children(tmp_path, start_program):
-    demo = start_program([DEMO, '--log-dir', str(tmp_path)], stderr=subprocess.STDOUT)
+    demo = start_program([program_path('turning_demo'), '--log-dir', str(tmp_path)],
+                         stderr=subprocess.STDOUT)
     seen = []
     for line in demo.stdout:
         seen.append(line)

@@ -7,15 +7,14 @@ found and never copied here; the project's test models in test/models/ cover the
 
 import math
 import os
-import subprocess
 import types
 
-from ament_index_python.packages import get_package_prefix
 from file_opens import FileOpens
 from geometry_msgs.msg import Twist
 import mujoco
 from nav_msgs.msg import Odometry
 import numpy as np
+from programs import run_program
 import pytest
 from rcl_interfaces.msg import Log
 from repository import LESSON_ROBOTS, read_model, TEST_MODELS
@@ -29,15 +28,13 @@ pytestmark = pytest.mark.ros
 
 LESSON_R2D2 = os.path.join(LESSON_ROBOTS, 'service_tutorial', 'models', 'r2d2.urdf')
 LESSON_GCAMP = os.path.join(LESSON_ROBOTS, 'gcamp_gazebo')
-CLIENT = os.path.join(get_package_prefix('service_tutorial'), 'lib', 'service_tutorial',
-                      'spawn_model_client')
 needs_lesson = pytest.mark.skipif(
     not os.path.isdir(LESSON_ROBOTS), reason=f'the lesson robots are not at {LESSON_ROBOTS}')
 
 
 def spawn_client(*args):
     """Run the installed spawn_model_client; return the finished process."""
-    return subprocess.run([CLIENT, *args], capture_output=True, text=True, timeout=60)
+    return run_program('spawn_model_client', *args)
 
 
 def tilt_of(orientation):
