@@ -15,50 +15,15 @@ from service_tutorial.sim.plugins.skid_steer import SkidSteer
 from service_tutorial.sim.urdf.builder import load_urdf
 from service_tutorial.sim.validation import WorldError
 from service_tutorial.sim.world import World
+from worlds import drive_and_stop, settled_world
 
 DIFF_DRIVES = ('diffbot_ros1', 'diffbot_ros2', 'pairbot_ros2')
 UNMEASURED = 1e12
 
 
-def heading(quaternion):
-    w, x, y, z = quaternion
-    return math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
-
-
-def drive_and_stop(world, name, linear_x, angular_z, seconds):
-    """
-    Command a twist at 50 Hz for some seconds, then stop and let the robot come to rest.
-
-    Return (turn, distance) from ground truth: the heading change, unwrapped, and the
-    straight-line distance between where the robot started and where it stopped.
-    """
-    start = world.get_model_state(name)
-    turned, last = 0.0, heading(start.orientation)
-
-    def track():
-        nonlocal turned, last
-        current = heading(world.get_model_state(name).orientation)
-        turned += (current - last + math.pi) % (2.0 * math.pi) - math.pi
-        last = current
-
-    for _ in range(round(seconds / 0.02)):
-        world.command_velocity(name, linear_x, angular_z)
-        world.step(10)
-        track()
-    world.command_velocity(name, 0.0, 0.0)
-    for _ in range(50):
-        world.step(10)
-        track()
-    end = world.get_model_state(name)
-    return turned, float(np.linalg.norm(end.position[:2] - start.position[:2]))
-
-
-def settled(name, **kwargs):
+def settled(name, **world_options):
     """Return a world with a test robot that has settled for half a second."""
-    world = World(**kwargs)
-    world.spawn_urdf_file(name, model_path(name, TEST_MODELS))
-    world.step(250)
-    return world
+    return settled_world(name, model_path(name, TEST_MODELS), **world_options)
 
 
 @pytest.mark.parametrize('name', DIFF_DRIVES)

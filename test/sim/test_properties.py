@@ -15,7 +15,7 @@ import numpy as np
 from repository import TINYBOT
 from service_tutorial.sim.plugins.diff_drive import MAX_WHEEL_RIM_SPEED
 from service_tutorial.sim.validation import bounded, WorldError
-from service_tutorial.sim.world import World
+from worlds import settled_world
 
 PROPERTY_SETTINGS = settings(max_examples=60, derandomize=True, database=None, deadline=None,
                              suppress_health_check=[HealthCheck.too_slow])
@@ -139,10 +139,8 @@ def robots(draw):
 
 
 def tinybot_world():
-    world = World()
-    world.spawn_urdf_file('tinybot', TINYBOT)
-    world.step(50)
-    return world
+    """Return a world with tinybot, settled for a tenth of a second."""
+    return settled_world('tinybot', TINYBOT, steps=50)
 
 
 def everything(world):

@@ -276,6 +276,15 @@ def test_tinybot_carries_a_laser_a_camera_and_an_imu():
 # ---------------------------------------------------------------- refusals
 
 
+def refusal_of(path, old, new):
+    """Load a sensor robot with one piece of its file replaced; return why it is refused."""
+    urdf = read_file(path)
+    assert old in urdf
+    with pytest.raises(UrdfError) as refusal:
+        load_urdf(urdf.replace(old, new))
+    return str(refusal.value)
+
+
 @pytest.mark.parametrize('old, new, message', [
     ('<samples>181</samples>', '<samples>0</samples>',
      "sensor 'front_laser' <ray/scan/horizontal/samples> must be a whole number above 0: "
@@ -305,14 +314,10 @@ def test_tinybot_carries_a_laser_a_camera_and_an_imu():
      "<sensor type=\"gpu_ray\">, but sits in sensor 'front_laser' of type 'camera'"),
 ])
 def test_bad_laser_blocks_are_refused_naming_sensor_tag_and_value(old, new, message):
-    urdf = read_file(LASER_ROBOT)
-    assert old in urdf
-    with pytest.raises(UrdfError) as refusal:
-        load_urdf(urdf.replace(old, new))
-    assert str(refusal.value) == message
+    assert refusal_of(LASER_ROBOT, old, new) == message
     world = World()
     with pytest.raises(WorldError, match='front_laser'):
-        world.spawn_urdf('laser', urdf.replace(old, new))
+        world.spawn_urdf('laser', read_file(LASER_ROBOT).replace(old, new))
     assert world.model_names() == []
 
 
@@ -331,11 +336,7 @@ def test_bad_laser_blocks_are_refused_naming_sensor_tag_and_value(old, new, mess
      "BGR_INT8, L8, L_INT8: 'BAYER_RGGB8'"),
 ])
 def test_bad_camera_blocks_are_refused(old, new, message):
-    urdf = read_file(CAMERA_ROBOT)
-    assert old in urdf
-    with pytest.raises(UrdfError) as refusal:
-        load_urdf(urdf.replace(old, new))
-    assert str(refusal.value) == message
+    assert refusal_of(CAMERA_ROBOT, old, new) == message
 
 
 @pytest.mark.parametrize('old, new, message', [
@@ -350,11 +351,7 @@ def test_bad_camera_blocks_are_refused(old, new, message):
      "'inf'"),
 ])
 def test_bad_imu_blocks_are_refused(old, new, message):
-    urdf = read_file(IMU_ROBOT)
-    assert old in urdf
-    with pytest.raises(UrdfError) as refusal:
-        load_urdf(urdf.replace(old, new))
-    assert str(refusal.value) == message
+    assert refusal_of(IMU_ROBOT, old, new) == message
 
 
 def test_a_sensor_plugin_outside_a_sensor_is_refused():

@@ -8,20 +8,13 @@ import mujoco
 import numpy as np
 import pytest
 from repository import R2D2, read_file, TINYBOT
+from service_tutorial.sim import frames
 from service_tutorial.sim.plugins.diff_drive import MAX_WHEEL_RIM_SPEED
 from service_tutorial.sim.validation import WorldError
 from service_tutorial.sim.world import World
+from worlds import drive_and_stop, heading, settled_world
 
 FACING_MINUS_Y = (0.707, 0.0, 0.0, -0.707)
-
-
-def heading(quaternion):
-    w, x, y, z = quaternion
-    return math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
-
-
-def yaw_quaternion(yaw):
-    return (math.cos(yaw / 2.0), 0.0, 0.0, math.sin(yaw / 2.0))
 
 
 def tinybot_state(world):
@@ -47,10 +40,7 @@ def world():
 
 @pytest.fixture
 def tinybot_world():
-    world = World()
-    world.spawn_urdf_file('tinybot', TINYBOT)
-    world.step(250)
-    return world
+    return settled_world('tinybot', TINYBOT)
 
 
 def test_r2d2_dropped_from_one_metre_lands_upright_facing_minus_y(world):
@@ -118,7 +108,7 @@ def test_model_listing_and_delete(world):
 
 def test_reference_frames(world):
     world.spawn_urdf_file('tinybot', TINYBOT, position=(1.0, 0.0, 0.0),
-                          orientation=yaw_quaternion(math.pi / 2.0))
+                          orientation=frames.yaw_quaternion(math.pi / 2.0))
     world.spawn_urdf_file('r2d2', R2D2, position=(1.0, 0.0, 0.0), reference_frame='tinybot')
     in_world = world.get_model_state('r2d2', 'world')
     np.testing.assert_allclose(in_world.position, [1.0, 1.0, 0.0], atol=1e-9)
@@ -139,7 +129,7 @@ def test_reference_frames(world):
 def test_set_and_get_model_state(world):
     world.spawn_urdf_file('r2d2', R2D2)
     world.spawn_urdf_file('tinybot', TINYBOT, position=(0.0, 3.0, 0.0))
-    orientation = yaw_quaternion(0.6)
+    orientation = frames.yaw_quaternion(0.6)
     world.set_model_state('r2d2', position=(3.0, 4.0, 0.5), orientation=orientation,
                           linear_velocity=(0.5, 0.0, 0.0), angular_velocity=(0.0, 0.0, 0.2))
     state = world.get_model_state('r2d2')
@@ -241,30 +231,8 @@ def test_tinybot_turns_and_drives_as_commanded(linear_x, angular_z, seconds, tol
     world = World()
     world.spawn_urdf('tinybot', urdf)
     world.step(250)
-    start = world.get_model_state('tinybot')
-    turned, last_heading = 0.0, heading(start.orientation)
-    odometry_turned, last_odometry_heading = 0.0, heading(world.odometry('tinybot').orientation)
-
-    def track():
-        nonlocal turned, last_heading, odometry_turned, last_odometry_heading
-        current = heading(world.get_model_state('tinybot').orientation)
-        turned += (current - last_heading + math.pi) % (2.0 * math.pi) - math.pi
-        last_heading = current
-        current = heading(world.odometry('tinybot').orientation)
-        odometry_turned += (current - last_odometry_heading + math.pi) % (2.0 * math.pi) - math.pi
-        last_odometry_heading = current
-
-    for _ in range(round(seconds / 0.02)):
-        world.command_velocity('tinybot', linear_x, angular_z)
-        world.step(10)
-        track()
-    world.command_velocity('tinybot', 0.0, 0.0)
-    for _ in range(25):
-        world.step(10)
-        track()
-
-    end = world.get_model_state('tinybot')
-    travelled = np.linalg.norm(end.position[:2] - start.position[:2])
+    turned, travelled, odometry_turned = drive_and_stop(
+        world, 'tinybot', linear_x, angular_z, seconds, rest_steps=250, odometry=True)
     odometry_travelled = np.linalg.norm(world.odometry('tinybot').position[:2])
     expected_turn, expected_travel = angular_z * seconds, linear_x * seconds
     scale_turn, scale_travel = max(abs(expected_turn), 1.0), max(expected_travel, 0.1)
@@ -274,15 +242,23 @@ def test_tinybot_turns_and_drives_as_commanded(linear_x, angular_z, seconds, tol
     assert abs(odometry_travelled - travelled) <= tolerance * scale_travel
 
 
+def assert_driving_forward_at(world, speed):
+    assert world.odometry('tinybot').linear_velocity[0] == pytest.approx(speed, rel=0.02)
+
+
+def assert_wheels_stopped(world):
+    _, _, wheel_speeds = world.joint_state('tinybot')
+    np.testing.assert_allclose(wheel_speeds, 0.0, atol=1e-3)
+
+
 def test_command_times_out_and_the_wheels_stop(tinybot_world):
     world = tinybot_world
     world.command_velocity('tinybot', 0.2, 0.0)
     world.step(200)
-    assert world.odometry('tinybot').linear_velocity[0] == pytest.approx(0.2, rel=0.02)
+    assert_driving_forward_at(world, 0.2)
     # The command lapses at 0.5 s; the wheels then ramp down at 1 m/s^2 for 0.2 s.
     world.step(250)
-    _, _, wheel_speeds = world.joint_state('tinybot')
-    np.testing.assert_allclose(wheel_speeds, 0.0, atol=1e-3)
+    assert_wheels_stopped(world)
     assert np.linalg.norm(world.get_model_state('tinybot').linear_velocity) < 1e-3
     position = world.get_model_state('tinybot').position
     world.step(500)
@@ -294,19 +270,17 @@ def test_a_new_cmd_vel_timeout_applies_to_the_command_in_force(tinybot_world):
     world.set_cmd_vel_timeout(0.0)  # never lapse
     world.command_velocity('tinybot', 0.2, 0.0)
     world.step(500)  # 1 s, twice the default timeout
-    assert world.odometry('tinybot').linear_velocity[0] == pytest.approx(0.2, rel=0.02)
+    assert_driving_forward_at(world, 0.2)
     # The command came 1 s ago: with a timeout of 0.6 s it lapsed, and the wheels stop now.
     world.set_cmd_vel_timeout(0.6)
     world.step(150)  # the wheels ramp down at 1 m/s^2 for 0.2 s
-    _, _, wheel_speeds = world.joint_state('tinybot')
-    np.testing.assert_allclose(wheel_speeds, 0.0, atol=1e-3)
+    assert_wheels_stopped(world)
     # A new command lasts the new timeout.
     world.command_velocity('tinybot', 0.2, 0.0)
     world.step(250)
-    assert world.odometry('tinybot').linear_velocity[0] == pytest.approx(0.2, rel=0.02)
+    assert_driving_forward_at(world, 0.2)
     world.step(250)
-    _, _, wheel_speeds = world.joint_state('tinybot')
-    np.testing.assert_allclose(wheel_speeds, 0.0, atol=1e-3)
+    assert_wheels_stopped(world)
     with pytest.raises(WorldError, match='cmd_vel_timeout must not be negative: -1.0'):
         world.set_cmd_vel_timeout(-1)
 
