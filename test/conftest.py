@@ -49,6 +49,7 @@ class RosHarness:
     def __init__(self):
         from rclpy.node import Node
         self._spinning = []
+        self._action_clients = []
         self.client_node = self.add_node(Node('test_client'))
 
     def add_node(self, node):
@@ -60,6 +61,13 @@ class RosHarness:
         thread.start()
         self._spinning.append((node, executor, thread))
         return node
+
+    def action_client(self, action_type, action_name):
+        """Make an action client on the client node; it is destroyed after the test."""
+        from rclpy.action import ActionClient
+        client = ActionClient(self.client_node, action_type, action_name)
+        self._action_clients.append(client)
+        return client
 
     def call(self, srv_type, service_name, request, *, timeout=10.0):
         """Call a service from the client node and return its response or fail the test."""
@@ -124,7 +132,9 @@ class RosHarness:
         return bool(predicate())
 
     def shutdown(self):
-        """Stop every executor and destroy every node the test used."""
+        """Stop every executor and destroy every action client and node the test used."""
+        for client in self._action_clients:
+            client.destroy()
         for node, executor, thread in reversed(self._spinning):
             executor.shutdown(timeout_sec=5.0)
             thread.join(timeout=5.0)

@@ -24,9 +24,7 @@ def progress(stdout):
 
 @pytest.fixture
 def action_world(ros):
-    action_world = ActionWorld(ros)
-    yield action_world
-    action_world.destroy()
+    return ActionWorld(ros)
 
 
 def test_prompted_client_sends_the_first_valid_pair_and_follows_it(action_world):

@@ -9,7 +9,6 @@ from geometry_msgs.msg import Twist
 from programs import program_path
 import pytest
 from rcl_interfaces.srv import DescribeParameters
-from rclpy.action import ActionClient
 from rclpy.parameter import Parameter
 from service_tutorial.conversions import seconds_of, yaw_of
 from service_tutorial.lesson.robot_turning_action_server import RobotTurningActionServer
@@ -91,7 +90,7 @@ class ActionWorld:
         overrides += [Parameter(name, value=value) for name, value in server_parameters.items()]
         self.server = ros.add_node(RobotTurningActionServer(parameter_overrides=overrides))
         self.cmd_vel = ros.subscribe(Twist, '/cmd_vel')
-        self.action_client = ActionClient(ros.client_node, TurnRobot, '/turn_robot')
+        self.action_client = ros.action_client(TurnRobot, '/turn_robot')
         assert self.action_client.wait_for_server(timeout_sec=10.0)
 
     def state(self):
@@ -113,15 +112,10 @@ class ActionWorld:
         status, result = goal.result()
         return status, result, goal.feedback, truth.turned
 
-    def destroy(self):
-        self.action_client.destroy()
-
 
 @pytest.fixture
 def action_world(ros):
-    action_world = ActionWorld(ros)
-    yield action_world
-    action_world.destroy()
+    return ActionWorld(ros)
 
 
 def test_a_quarter_turn_left_ends_on_target_with_rising_feedback(action_world):
@@ -290,15 +284,12 @@ def test_parameters_are_described_and_held_to_their_ranges(ros):
 def test_a_goal_without_odometry_is_aborted_with_the_reason(ros):
     ros.add_node(RobotTurningActionServer(
         parameter_overrides=[Parameter('odom_timeout', value=0.2)]))
-    action_client = ActionClient(ros.client_node, TurnRobot, '/turn_robot')
-    try:
-        assert action_client.wait_for_server(timeout_sec=10.0)
-        future = action_client.send_goal_async(TurnRobot.Goal(angle=1.0, angular_vel=0.5))
-        assert ros.wait_for(future.done)
-        result_future = future.result().get_result_async()
-        assert ros.wait_for(result_future.done)
-    finally:
-        action_client.destroy()
+    action_client = ros.action_client(TurnRobot, '/turn_robot')
+    assert action_client.wait_for_server(timeout_sec=10.0)
+    future = action_client.send_goal_async(TurnRobot.Goal(angle=1.0, angular_vel=0.5))
+    assert ros.wait_for(future.done)
+    result_future = future.result().get_result_async()
+    assert ros.wait_for(result_future.done)
 
     response = result_future.result()
     assert response.status == GoalStatus.STATUS_ABORTED
