@@ -65,7 +65,7 @@ def core_fleet(count, *, driving):
     for index, name in enumerate(fleet_names(count)):
         world.spawn_urdf_file(name, path, position=fleet_position(index))
         if driving:
-            world.command_velocity(name, DRIVE_LINEAR_X, DRIVE_ANGULAR_Z)
+            world.models[name].drive().command_velocity(DRIVE_LINEAR_X, DRIVE_ANGULAR_Z)
     return world
 
 

@@ -45,11 +45,6 @@ def fill_quaternion_msg(quaternion, orientation):
     quaternion.w, quaternion.x, quaternion.y, quaternion.z = (float(v) for v in orientation)
 
 
-def yaw_quaternion(yaw):
-    """Return the MuJoCo (w, x, y, z) quaternion of a turn by yaw radians about z."""
-    return (math.cos(yaw / 2.0), 0.0, 0.0, math.sin(yaw / 2.0))
-
-
 def yaw_of(orientation):
     """Return the heading (rotation about z, in rad) of a geometry_msgs/Quaternion."""
     w, x, y, z = quaternion_from_msg(orientation)
@@ -83,7 +78,8 @@ def make_pose(x=0.0, y=0.0, z=0.0, *, yaw=None, quaternion=None):
     if yaw is not None and quaternion is not None:
         raise ValueError('give the orientation as yaw or as quaternion, not both')
     if quaternion is None:
-        orientation = yaw_quaternion(0.0 if yaw is None else yaw)
+        half = 0.0 if yaw is None else yaw / 2.0
+        orientation = (math.cos(half), 0.0, 0.0, math.sin(half))
     else:
         qx, qy, qz, qw = quaternion
         orientation = (qw, qx, qy, qz)

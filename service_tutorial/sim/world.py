@@ -130,25 +130,11 @@ class World:
         """Return the models the world removed by itself because they kept blowing up."""
         return self._recovery.take_removed()
 
-    def diff_drive_models(self):
-        """Return the names of the models that carry a drive (diff drive or skid steer)."""
-        return [name for name, model in self._models.items() if model.drive() is not None]
-
-    def diff_drive(self, name):
-        """Return the DiffDriveConfig of a model's drive."""
-        return self._diff_drive(name).config
-
     def _spawned(self, name):
         model = self._models.get(name) if isinstance(name, str) else None
         if model is None:
             raise WorldError(f'no model named {quoted(str(name))}')
         return model
-
-    def _diff_drive(self, name):
-        drive = self._spawned(name).drive()
-        if drive is None:
-            raise WorldError(f"model '{name}' has no diff drive")
-        return drive
 
     # ---------------------------------------------------------------- spawn and delete
 
@@ -376,18 +362,10 @@ class World:
         """Return (URDF joint names, positions, velocities) of a model's moving joints."""
         return self._spawned(name).joint_state(self._data)
 
-    # ---------------------------------------------------------------- diff drive
+    # ---------------------------------------------------------------- drives
 
     def set_cmd_vel_timeout(self, seconds):
         """Let drive commands lapse after seconds (0: never), those in force as well."""
         self._cmd_vel_timeout = validation.non_negative_number(seconds, 'cmd_vel_timeout')
         plugins.set_command_timeout(self._models.values(), self._cmd_vel_timeout)
         self.schedule_events()
-
-    def command_velocity(self, name, linear_x, angular_z):
-        """Command a drive robot's body twist; return the twist its drive carries out."""
-        return self._diff_drive(name).command_velocity(linear_x, angular_z)
-
-    def odometry(self, name):
-        """Return the odometry of a drive robot, from its encoders or ground truth."""
-        return self._diff_drive(name).odometry()

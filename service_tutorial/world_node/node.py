@@ -27,8 +27,8 @@ from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from rosgraph_msgs.msg import Clock
 from service_tutorial.conversions import fill_time_msg
-from service_tutorial.conversions import yaw_quaternion
 from service_tutorial.robot_files import file_model_name, read_robot_file
+from service_tutorial.sim import frames
 from service_tutorial.world_node.camera_stream import CAMERA_PARAMETERS, CameraStream
 from service_tutorial.world_node.gazebo_services import GazeboServices
 from service_tutorial.world_node.log_forwarding import forward_core_logs
@@ -67,7 +67,7 @@ def start_up_models(parameters):
         raise ValueError('models, model_names, model_namespaces and model_poses '
                          '(4 numbers each) must describe the same number of models')
     return [(resolve_model_path(model), name, namespace, poses[4 * index:4 * index + 3],
-             yaw_quaternion(poses[4 * index + 3]))
+             frames.yaw_quaternion(poses[4 * index + 3]))
             for index, (model, name, namespace) in enumerate(zip(files, names, namespaces))]
 
 

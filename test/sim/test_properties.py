@@ -158,7 +158,7 @@ def assert_sound(world):
         assert np.isfinite(np.concatenate([state.position, state.orientation,
                                            state.linear_velocity,
                                            state.angular_velocity])).all()
-    odometry = world.odometry('tinybot')
+    odometry = world.models['tinybot'].drive().odometry()
     assert np.isfinite(np.concatenate([odometry.position, odometry.linear_velocity])).all()
 
 
@@ -181,7 +181,7 @@ def test_generated_robots_are_spawned_or_refused_and_the_world_stays_sound(
     assert_sound(world)
     if drive and 'generated' in world.models:
         try:
-            world.command_velocity('generated', *command)
+            world.models['generated'].drive().command_velocity(*command)
         except WorldError as error:
             assert 'NaN or infinite' in str(error)
         world.step(100)
@@ -208,11 +208,11 @@ def test_any_set_state_and_command_leaves_the_world_finite(moves):
         except WorldError as error:
             assert str(error)
         try:
-            linear_x, angular_z = world.command_velocity('tinybot', *command)
+            linear_x, angular_z = world.models['tinybot'].drive().command_velocity(*command)
         except WorldError as error:
             assert 'NaN or infinite' in str(error)
         else:
-            config = world.diff_drive('tinybot')
+            config = world.models['tinybot'].drive().config
             rim = max(abs(linear_x - angular_z * config.wheel_separation / 2.0),
                       abs(linear_x + angular_z * config.wheel_separation / 2.0))
             assert rim <= MAX_WHEEL_RIM_SPEED * (1.0 + 1e-12)

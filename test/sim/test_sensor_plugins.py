@@ -208,7 +208,7 @@ def test_imu_at_rest_reads_gravity_up_and_follows_a_turn():
         assert imu.linear_acceleration == pytest.approx([0.0, 0.0, 9.81], abs=0.05)
         assert imu.angular_velocity == pytest.approx([0.0, 0.0, 0.0], abs=1e-3)
     start = yaw(world.get_model_state('imu_bot').orientation)
-    world.command_velocity('imu_bot', 0.0, 0.5)
+    world.models['imu_bot'].drive().command_velocity(0.0, 0.5)
     turned = 0.0
     while turned < 1.0:
         world.step(1)

@@ -51,10 +51,10 @@ def test_a_robot_spawned_again_reuses_its_description():
     assert first.description is second.description
     # Each model has plugins of its own, configured from the shared description.
     assert first.drive() is not second.drive()
-    world.command_velocity('bot0', 0.2, 0.0)
+    world.models['bot0'].drive().command_velocity(0.2, 0.0)
     world.step(200)
-    assert world.odometry('bot0').position[0] > 0.02
-    assert abs(world.odometry('bot1').position[0]) < 1e-3
+    assert world.models['bot0'].drive().odometry().position[0] > 0.02
+    assert abs(world.models['bot1'].drive().odometry().position[0]) < 1e-3
     other = urdf.replace('</robot>', '<!-- another --></robot>')
     world.spawn_urdf('bot2', other, base_dir=os.path.dirname(TINYBOT), position=(2.0, 0.0, 0.0))
     assert world.models['bot2'].description is not first.description

@@ -57,7 +57,7 @@ def test_models_mapping_is_read_only_and_holds_the_plugins():
         world.models['c3po'] = world.models['r2d2']
     drive = world.models['tinybot'].plugins[0]  # then its laser, camera and IMU
     assert isinstance(drive, DiffDrive)
-    assert drive.config == world.diff_drive('tinybot')
+    assert drive.config == world.models['tinybot'].drive().config
     assert drive.block.filename == 'libgazebo_ros_diff_drive.so'
     assert drive.model is world.models['tinybot'] and drive.world is world
     assert world.models['r2d2'].plugins == ()
@@ -67,7 +67,7 @@ def test_saved_state_is_written_back_where_the_model_now_is():
     world = World()
     world.spawn_urdf_file('r2d2', R2D2, position=(3.0, 0.0, 0.0))
     world.spawn_urdf_file('tinybot', TINYBOT)
-    world.command_velocity('tinybot', 0.2, 0.5)
+    world.models['tinybot'].drive().command_velocity(0.2, 0.5)
     world.step(100)
     tinybot = world.models['tinybot']
     saved = tinybot.saved_state(world.data)

@@ -1,5 +1,6 @@
 """The world: spawning, deleting, frames, model state, resets, the diff drive and recovery."""
 
+import copy
 import logging
 import math
 import os
@@ -29,7 +30,7 @@ def drive(worlds, linear_x, angular_z, seconds, period=10):
     """Command the tinybot of every world at 50 Hz, stepping the worlds in lockstep."""
     for _ in range(round(seconds / (period * worlds[0].timestep))):
         for world in worlds:
-            world.command_velocity('tinybot', linear_x, angular_z)
+            world.models['tinybot'].drive().command_velocity(linear_x, angular_z)
             world.step(period)
 
 
@@ -98,7 +99,7 @@ def test_model_listing_and_delete(world):
     world.spawn_urdf_file('r2d2', R2D2, position=(2.0, 0.0, 0.0))
     assert world.model_names() == ['tinybot', 'r2d2']
     assert 'r2d2' in world.models and 'c3po' not in world.models
-    assert world.diff_drive_models() == ['tinybot']
+    assert [name for name, model in world.models.items() if model.drive()] == ['tinybot']
     world.delete_model('r2d2')
     assert world.model_names() == ['tinybot']
     with pytest.raises(WorldError, match="no model named 'r2d2'"):
@@ -196,7 +197,7 @@ def test_resets_put_models_back_at_rest(tinybot_world, reset, keeps_time):
     tinybot = world.get_model_state('tinybot')
     np.testing.assert_allclose(tinybot.position, [0.0, 0.0, 0.0], atol=1e-12)
     assert not np.any(world.data.qvel) and not np.any(world.data.act)
-    odometry = world.odometry('tinybot')
+    odometry = world.models['tinybot'].drive().odometry()
     assert not np.any(odometry.position) and not np.any(odometry.linear_velocity)
     # The drive command was cleared: tinybot stays where it is.
     world.step(250)
@@ -205,7 +206,7 @@ def test_resets_put_models_back_at_rest(tinybot_world, reset, keeps_time):
 
 def test_pause_stops_time(tinybot_world):
     world = tinybot_world
-    world.command_velocity('tinybot', 0.2, 0.0)
+    world.models['tinybot'].drive().command_velocity(0.2, 0.0)
     world.pause()
     assert world.paused
     time, position = world.time, world.get_model_state('tinybot').position
@@ -233,7 +234,8 @@ def test_tinybot_turns_and_drives_as_commanded(linear_x, angular_z, seconds, tol
     world.step(250)
     turned, travelled, odometry_turned = drive_and_stop(
         world, 'tinybot', linear_x, angular_z, seconds, rest_steps=250, odometry=True)
-    odometry_travelled = np.linalg.norm(world.odometry('tinybot').position[:2])
+    odometry = world.models['tinybot'].drive().odometry()
+    odometry_travelled = np.linalg.norm(odometry.position[:2])
     expected_turn, expected_travel = angular_z * seconds, linear_x * seconds
     scale_turn, scale_travel = max(abs(expected_turn), 1.0), max(expected_travel, 0.1)
     assert abs(turned - expected_turn) <= tolerance * scale_turn
@@ -243,7 +245,8 @@ def test_tinybot_turns_and_drives_as_commanded(linear_x, angular_z, seconds, tol
 
 
 def assert_driving_forward_at(world, speed):
-    assert world.odometry('tinybot').linear_velocity[0] == pytest.approx(speed, rel=0.02)
+    odometry = world.models['tinybot'].drive().odometry()
+    assert odometry.linear_velocity[0] == pytest.approx(speed, rel=0.02)
 
 
 def assert_wheels_stopped(world):
@@ -253,7 +256,7 @@ def assert_wheels_stopped(world):
 
 def test_command_times_out_and_the_wheels_stop(tinybot_world):
     world = tinybot_world
-    world.command_velocity('tinybot', 0.2, 0.0)
+    world.models['tinybot'].drive().command_velocity(0.2, 0.0)
     world.step(200)
     assert_driving_forward_at(world, 0.2)
     # The command lapses at 0.5 s; the wheels then ramp down at 1 m/s^2 for 0.2 s.
@@ -268,7 +271,7 @@ def test_command_times_out_and_the_wheels_stop(tinybot_world):
 def test_a_new_cmd_vel_timeout_applies_to_the_command_in_force(tinybot_world):
     world = tinybot_world
     world.set_cmd_vel_timeout(0.0)  # never lapse
-    world.command_velocity('tinybot', 0.2, 0.0)
+    world.models['tinybot'].drive().command_velocity(0.2, 0.0)
     world.step(500)  # 1 s, twice the default timeout
     assert_driving_forward_at(world, 0.2)
     # The command came 1 s ago: with a timeout of 0.6 s it lapsed, and the wheels stop now.
@@ -276,7 +279,7 @@ def test_a_new_cmd_vel_timeout_applies_to_the_command_in_force(tinybot_world):
     world.step(150)  # the wheels ramp down at 1 m/s^2 for 0.2 s
     assert_wheels_stopped(world)
     # A new command lasts the new timeout.
-    world.command_velocity('tinybot', 0.2, 0.0)
+    world.models['tinybot'].drive().command_velocity(0.2, 0.0)
     world.step(250)
     assert_driving_forward_at(world, 0.2)
     world.step(250)
@@ -287,14 +290,11 @@ def test_a_new_cmd_vel_timeout_applies_to_the_command_in_force(tinybot_world):
 
 def test_diff_drive_requests_are_checked(world):
     world.spawn_urdf_file('r2d2', R2D2)
-    with pytest.raises(WorldError, match="model 'r2d2' has no diff drive"):
-        world.command_velocity('r2d2', 0.1, 0.0)
-    with pytest.raises(WorldError, match="no model named 'tinybot'"):
-        world.odometry('tinybot')
+    assert world.models['r2d2'].drive() is None
     world.spawn_urdf_file('tinybot', TINYBOT, position=(2.0, 0.0, 0.0))
     with pytest.raises(WorldError, match='linear_x is NaN'):
-        world.command_velocity('tinybot', math.nan, 0.0)
-    odometry = world.odometry('tinybot')
+        world.models['tinybot'].drive().command_velocity(math.nan, 0.0)
+    odometry = world.models['tinybot'].drive().odometry()
     assert (odometry.odometry_frame, odometry.robot_base_frame) == ('odom', 'base_footprint')
     names, positions, velocities = world.joint_state('tinybot')
     assert names == ['wheel_left_joint', 'wheel_right_joint']
@@ -428,11 +428,9 @@ def test_spawned_models_step_exactly_as_bare_mujoco_steps(tinybot_world):
     assert world.model_names() == ['tinybot'] + [f'r2d2_{index}' for index in range(5)]
 
     model, data = world.model, world.data
+    raw = copy.copy(data)  # bare MuJoCo from the same state
     kind = mujoco.mjtState.mjSTATE_INTEGRATION
-    raw = mujoco.MjData(model)
     state = np.empty(mujoco.mj_stateSize(model, kind))
-    mujoco.mj_getState(model, data, state, kind)
-    mujoco.mj_setState(model, raw, state, kind)
     raw_state = np.empty_like(state)
     for _ in range(3):
         assert world.step(1000) == 1000
@@ -511,8 +509,8 @@ def test_robot_made_unstable_from_outside_gets_one_reset_per_placement(caplog):
 def test_absurd_drive_commands_are_scaled_to_the_rim_speed_limit(linear_x, angular_z):
     world = World()
     world.spawn_urdf_file('tinybot', TINYBOT)
-    config = world.diff_drive('tinybot')
-    applied_x, applied_z = world.command_velocity('tinybot', linear_x, angular_z)
+    config = world.models['tinybot'].drive().config
+    applied_x, applied_z = world.models['tinybot'].drive().command_velocity(linear_x, angular_z)
     rim_speeds = (applied_x - applied_z * config.wheel_separation / 2.0,
                   applied_x + applied_z * config.wheel_separation / 2.0)
     assert max(abs(speed) for speed in rim_speeds) == pytest.approx(MAX_WHEEL_RIM_SPEED)

@@ -47,16 +47,16 @@ def drive_and_stop(world, name, linear_x, angular_z, seconds, *, rest_steps=500,
     start = world.get_model_state(name).position
     turns = [Turn(lambda: world.get_model_state(name).orientation)]
     if odometry:
-        turns.append(Turn(lambda: world.odometry(name).orientation))
+        turns.append(Turn(lambda: world.models[name].drive().odometry().orientation))
 
     def step_and_track():
         world.step(10)
         for turn in turns:
             turn.update()
     for _ in range(round(seconds / 0.02)):
-        world.command_velocity(name, linear_x, angular_z)
+        world.models[name].drive().command_velocity(linear_x, angular_z)
         step_and_track()
-    world.command_velocity(name, 0.0, 0.0)
+    world.models[name].drive().command_velocity(0.0, 0.0)
     for _ in range(rest_steps // 10):
         step_and_track()
     distance = float(np.linalg.norm(world.get_model_state(name).position[:2] - start[:2]))

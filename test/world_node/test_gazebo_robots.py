@@ -181,7 +181,7 @@ def test_the_lessons_tinybot_xacro_spawns_through_the_client_and_turns(
     # The block's wheelSeparation (0.4 m) is not the spacing of the robot's wheel joints
     # (0.3 m). gazebo_ros_diff_drive sets the wheel speeds from wheelSeparation alone, so wheels
     # that grip turn this robot 0.4 / 0.3 times the commanded angle; slip can only take from it.
-    gripping = 1.0 * (real_time_world.node.world.diff_drive('tb2').wheel_separation
+    gripping = 1.0 * (real_time_world.node.world.models['tb2'].drive().config.wheel_separation
                       / wheel_spacing(real_time_world, 'tb2::left_wheel', 'tb2::right_wheel'))
     print(f'\nlesson tinybot_diff.xacro, angular.z 0.5 on /tb2/cmd_vel for 2 s after settling: '
           f'turned {turned:.4f} rad ({100.0 * (turned - 1.0):+.1f} %, ground truth); '
