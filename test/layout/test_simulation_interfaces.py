@@ -15,12 +15,12 @@ import sys
 from ament_index_python.packages import get_package_prefix, get_package_share_directory
 import pytest
 from rclpy.node import Node
+from repository import ROOT
 import simulation_interfaces
 from simulation_interfaces import action, msg, srv
 
 pytestmark = pytest.mark.ros
 
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 DEFINITIONS = os.path.join(ROOT, 'scripts', 'simulation_interfaces')
 
 # Type hashes (RIHS01) of the standard's Jazzy release 1.5.1, as the apt package has them.
