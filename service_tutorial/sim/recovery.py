@@ -7,17 +7,17 @@ model goes through the step as if nothing had happened.
 """
 
 import collections
-import logging
 
 import mujoco
 import numpy as np
+from service_tutorial.sim.core_logs import core_logger
 from service_tutorial.sim.validation import bounded
 from service_tutorial.sim.validation import HUGE_ACCELERATION
 from service_tutorial.sim.validation import HUGE_POSITION
 from service_tutorial.sim.validation import HUGE_VELOCITY
 
 # The world's log: one name for everything that happens to its models.
-_logger = logging.getLogger('service_tutorial.world')
+_logger = core_logger('service_tutorial.world')
 
 STATE = mujoco.mjtState.mjSTATE_INTEGRATION
 _BAD_STATE_WARNINGS = (mujoco.mjtWarning.mjWARN_BADQPOS, mujoco.mjtWarning.mjWARN_BADQVEL,

@@ -7,7 +7,6 @@ deleting one model leaves the state of every other model exactly as it was.
 """
 
 import functools
-import logging
 import math
 import os
 import types
@@ -19,6 +18,7 @@ from service_tutorial.sim import frames
 from service_tutorial.sim import plugins
 from service_tutorial.sim import scene
 from service_tutorial.sim import validation
+from service_tutorial.sim.core_logs import core_logger
 from service_tutorial.sim.description import UrdfError
 from service_tutorial.sim.description_cache import DescriptionCache
 from service_tutorial.sim.frames import ModelState
@@ -31,7 +31,7 @@ from service_tutorial.sim.validation import quoted
 from service_tutorial.sim.validation import WorldError
 
 # The world's log: one name for everything that happens to its models.
-_logger = logging.getLogger('service_tutorial.world')
+_logger = core_logger('service_tutorial.world')
 
 
 def _log_mujoco_warning(message):

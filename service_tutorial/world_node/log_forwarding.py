@@ -6,18 +6,19 @@ spawns, deletes, recoveries, MuJoCo's warnings. forward_core_logs(node) hangs a 
 logger which hands each record to the node's logger, so that the console of `ros2 run` and
 /rosout show it under the node's name; the handle it returns takes the handler off again.
 
-The records still propagate to the root logger as usual: an application that configured
-logging for itself (or pytest's caplog) sees them too, and a plain `ros2 run` has no root
-handler, so nothing is printed twice. The `service_tutorial` logger is given the node logger's
-level while forwarding, since Python's default level (WARNING) would drop spawns and deletes.
+The records still propagate to the root logger as usual, whatever logger class `launch` or
+anything else installed (sim/core_logs.py): an application that configured logging for itself
+(or pytest's caplog) sees them too, and a plain `ros2 run` has no root handler, so nothing is
+printed twice. The `service_tutorial` logger is given the node logger's level while forwarding,
+since Python's default level (WARNING) would drop spawns and deletes.
 """
 
 import logging
 
 from rclpy.impl.implementation_singleton import rclpy_implementation
 from rclpy.logging import LoggingSeverity
+from service_tutorial.sim.core_logs import CORE_LOGGER, core_logger
 
-CORE_LOGGER = 'service_tutorial'
 # rclpy's severities are Python's levels; a record goes out at the highest one it reaches.
 _SEVERITIES = (LoggingSeverity.FATAL, LoggingSeverity.ERROR, LoggingSeverity.WARN,
                LoggingSeverity.INFO, LoggingSeverity.DEBUG)
@@ -70,7 +71,7 @@ class ForwardedLogs:
 def forward_core_logs(node):
     """Send the `service_tutorial` loggers' records to node's logger until stop() is called."""
     ros_logger = node.get_logger()
-    logger = logging.getLogger(CORE_LOGGER)
+    logger = core_logger(CORE_LOGGER)
     previous_level = logger.level
     # rclpy's severities are Python's levels: DEBUG 10, INFO 20, WARN 30, ERROR 40, FATAL 50.
     logger.setLevel(int(ros_logger.get_effective_level()) or logging.INFO)

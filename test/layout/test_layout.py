@@ -185,3 +185,12 @@ def test_no_class_is_longer_than_350_lines():
                     too_long.append(f'{relative(path)}:{node.lineno}: class {node.name}, '
                                     f'{lines} lines')
     assert not too_long, f'over {MAX_CLASS_LINES} lines:\n' + '\n'.join(too_long)
+
+
+def test_the_package_logs_only_through_core_logger():
+    # A logger taken straight from logging inherits the propagation of whatever logger class is
+    # installed, and launch's does not propagate: its records would miss /rosout and the root.
+    direct = [f'{relative(path)}:{node.lineno}' for path in python_files(PACKAGE)
+              if os.path.basename(path) != 'core_logs.py' for node in ast.walk(parse(path))
+              if isinstance(node, ast.Call) and ast.unparse(node.func) == 'logging.getLogger']
+    assert not direct, 'logging.getLogger instead of core_logger():\n' + '\n'.join(direct)

@@ -388,6 +388,7 @@ def test_unstable_robot_is_reset_alone(poke, tmp_path, monkeypatch, caplog):
     else:
         data.qpos[qpos_address + 2] = math.nan
     with caplog.at_level(logging.WARNING, logger='service_tutorial.world'):
+        caplog.clear()  # the spawns' INFO lines are kept where the root logs INFO (launch)
         drive([plain, broken], 0.2, 0.4, 0.3)
     assert np.isfinite(broken.data.qpos).all() and np.isfinite(broken.data.qvel).all()
     assert "model 'r2d2'" in caplog.text and "model 'tinybot'" not in caplog.text
@@ -465,6 +466,7 @@ def test_robot_unstable_at_its_spawn_pose_is_removed_and_the_others_go_on(label,
     drive([plain, broken], 0.2, 0.4, 0.2)
     broken.spawn_urdf('block', urdf, position=(2.0, 0.0, 0.3))
     with caplog.at_level(logging.WARNING, logger='service_tutorial.world'):
+        caplog.clear()  # the spawns' INFO lines are kept where the root logs INFO (launch)
         drive([plain, broken], 0.2, 0.4, 0.3)
     assert broken.model_names() == ['tinybot']
     assert broken.take_removed_models() == ['block'] and broken.take_removed_models() == []

@@ -5,6 +5,8 @@ What the world node tells the ROS graph besides its services, through real subsc
 """
 
 import logging
+import signal
+import sys
 import time
 
 from geometry_msgs.msg import Twist
@@ -14,12 +16,13 @@ from rcl_interfaces.msg import Log
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
-from repository import read_model
+from repository import read_model, ROOT
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState
 from service_tutorial.conversions import make_pose, seconds_of
 from service_tutorial.world_node.log_forwarding import RclpyHandler
 from service_tutorial.world_node.node import MujocoWorld
+from srv_interfaces.srv import DeleteModel, SpawnModel
 from std_msgs.msg import String
 from tf2_msgs.msg import TFMessage
 
@@ -198,6 +201,60 @@ def test_core_logs_reach_rosout_at_their_level(ros):
     expected = [(Log.INFO, 'level 20 from the core'), (Log.WARN, 'level 30 from the core'),
                 (Log.ERROR, 'level 40 from the core'), (Log.INFO, 'level 20 from the core')]
     assert ros.wait_for(lambda: log[-4:] == expected, timeout=5.0), log
+
+
+# The world in a process whose logger class was installed before the package was imported:
+# launch's, whose loggers do not propagate (launch.logging; launch_testing's pytest plugin imports
+# it in every pytest run on a Jazzy install), or where launch is missing a class doing the same.
+# The root logger gets a handler of the application's own, as caplog's or basicConfig's.
+WORLD_UNDER_A_LOGGER_CLASS = """
+import logging
+import sys
+
+if sys.argv[1] == 'launch':
+    import launch.logging
+    assert logging.getLoggerClass() is launch.logging.LaunchLogger
+else:
+    class NotPropagating(logging.getLoggerClass()):
+        def __init__(self, *args, **kwargs):
+            super().__init__(*args, **kwargs)
+            self.propagate = False
+    logging.setLoggerClass(NotPropagating)
+logging.basicConfig(format='root logger: %(message)s')
+from service_tutorial.world_node.node import main
+main()
+"""
+
+
+@pytest.mark.parametrize('logger_class', ['launch', 'not propagating'])
+def test_the_worlds_logs_reach_rosout_and_the_root_whatever_the_logger_class(
+        ros, start_program, logger_class):
+    if logger_class == 'launch':
+        pytest.importorskip('launch.logging', reason='launch is not installed (not on PyPI)')
+    log = []
+    ros.client_node.create_subscription(  # transient local: also what came before it matched
+        Log, '/rosout', lambda msg: msg.name == 'mujoco' and log.append((msg.level, msg.msg)),
+        QoSProfile(depth=1000, durability=DurabilityPolicy.TRANSIENT_LOCAL))
+    world = start_program([sys.executable, '-c', WORLD_UNDER_A_LOGGER_CLASS, logger_class],
+                          cwd=ROOT)
+    try:
+        request = SpawnModel.Request(model_name='r2d2', model_xml=read_model('r2d2'))
+        response = ros.call(SpawnModel, '/mujoco/spawn_urdf_model', request, timeout=60.0)
+        assert response.success, response.status_message
+        response = ros.call(DeleteModel, '/mujoco/delete_model',
+                            DeleteModel.Request(model_name='r2d2'))
+        assert response.success, response.status_message
+        logged = ["spawned model 'tinybot' at [0.0, 0.0, 0.0]",  # at start-up
+                  "spawned model 'r2d2' at [0.0, 0.0, 0.0]", "deleted model 'r2d2'"]
+        expected = [(Log.INFO, text) for text in logged]
+        assert ros.wait_for(lambda: [entry for entry in log if entry[1] in logged] == expected,
+                            timeout=5.0), log
+    finally:
+        world.send_signal(signal.SIGINT)
+        stderr = world.communicate(timeout=30.0)[1]
+    assert world.returncode == 0, stderr
+    root = [line for line in stderr.splitlines() if line.startswith('root logger: ')]
+    assert root == [f'root logger: {text}' for text in logged], stderr
 
 
 def test_the_log_handler_leaves_with_the_node(rclpy_session):

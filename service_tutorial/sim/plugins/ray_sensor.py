@@ -10,11 +10,11 @@ in-range readings only, which then stay within [range_min, range_max].
 
 from dataclasses import dataclass
 import functools
-import logging
 import math
 
 import mujoco
 import numpy as np
+from service_tutorial.sim.core_logs import core_logger
 from service_tutorial.sim.description import COLLISION_GROUP
 from service_tutorial.sim.description import UrdfError
 from service_tutorial.sim.plugins.sensor import gaussian_noise
@@ -24,7 +24,7 @@ from service_tutorial.sim.plugins.sensor import SENSOR_SITE_GROUP
 from service_tutorial.sim.plugins.sensor import SensorConfig
 from service_tutorial.sim.validation import quoted
 
-_logger = logging.getLogger(__name__)
+_logger = core_logger(__name__)
 
 SCAN = 'ray/scan/horizontal/'
 # The rays see the floor and scenery of MJCF files (group 0) and every URDF collision shape;
