@@ -320,7 +320,7 @@ def main(args=None):
     rclpy.init(args=args)
     world = None
     try:
-        world = run_or_exit(MujocoWorld)
+        world = run_or_exit('mujoco_world', MujocoWorld)
         rclpy.spin(world)
     except (KeyboardInterrupt, ExternalShutdownException):
         pass

@@ -14,7 +14,6 @@ into that line on stderr and exit status 2. config/world.yaml documents the same
 import array
 from collections.abc import Mapping
 import math
-import os
 import sys
 
 from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor
@@ -414,10 +413,12 @@ def declare_world_parameters(node):
     return WorldParameters(node)
 
 
-def run_or_exit(main, *args, **kwargs):
-    """Run a node's main(); a ParameterError ends the program with its line and status 2."""
+def run_or_exit(program, main, *args, **kwargs):
+    """Run a node's main(); a ParameterError ends it with `program: <the line>` and status 2."""
+    # The executable's name, not sys.argv[0]: started as a module or a file (as colcon test
+    # and launch may start it), the world still introduces itself as mujoco_world.
     try:
         return main(*args, **kwargs)
     except ParameterError as error:
-        print(f'{os.path.basename(sys.argv[0]) or "python"}: {error}', file=sys.stderr)
+        print(f'{program}: {error}', file=sys.stderr)
         sys.exit(2)

@@ -338,9 +338,9 @@ def test_a_failing_change_callback_is_logged_and_the_others_still_run(rclpy_sess
 
 
 def test_run_or_exit_passes_results_and_other_errors_through():
-    assert run_or_exit(lambda a, b=0: a + b, 1, b=2) == 3
+    assert run_or_exit('mujoco_world', lambda a, b=0: a + b, 1, b=2) == 3
     with pytest.raises(RuntimeError):
-        run_or_exit(lambda: (_ for _ in ()).throw(RuntimeError('bug')))
+        run_or_exit('mujoco_world', lambda: (_ for _ in ()).throw(RuntimeError('bug')))
 
 
 NODE_PROGRAM = textwrap.dedent("""\
@@ -359,7 +359,7 @@ NODE_PROGRAM = textwrap.dedent("""\
             rclpy.try_shutdown()
 
 
-    run_or_exit(main)
+    run_or_exit('mujoco_world', main)
     print('started')
 """)
 
@@ -379,6 +379,7 @@ def test_a_program_ends_with_one_line_and_status_2(tmp_path, argument, words):
         return
     lines = run.stderr.strip().splitlines()
     assert run.returncode == 2 and len(lines) == 1, run.stderr
-    assert lines[0].startswith('world_node.py: parameter ')
+    # The program's name, whatever file or module started it.
+    assert lines[0].startswith('mujoco_world: parameter ')
     for word in words:
         assert word in lines[0]
