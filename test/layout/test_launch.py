@@ -3,16 +3,23 @@ launch/world.launch.py and config/world.rviz.
 
 Read statically everywhere: the arguments, their defaults and types, the RViz displays. Where
 `launch` and `launch_ros` can be imported (a ROS 2 Jazzy install), the launch file is also
-loaded and its description checked; the PyPI wheels have neither, so those tests skip there.
+loaded and its description checked, and `ros2 launch` is run with every argument the way a user
+runs it; the PyPI wheels have neither, so those tests skip there.
+world_node/test_world_launch.py tests the launched world under launch_testing.
 """
 
 import ast
 import importlib.util
 import os
+import shutil
+import signal
+import subprocess
+import threading
 
 from ament_index_python.packages import get_package_share_directory
 import pytest
 from repository import ROOT
+from srv_interfaces.srv import GetModelList
 import yaml
 
 LAUNCH_FILE = os.path.join(ROOT, 'launch', 'world.launch.py')
@@ -142,8 +149,9 @@ def test_rviz_config_and_launch_file_are_installed():
 def launch_module():
     # The repository's launch/ folder is also importable as `launch` (a namespace package)
     # where the real one is missing: ask for a module only the real one has.
-    pytest.importorskip('launch_ros')
-    pytest.importorskip('launch.actions')
+    reason = 'launch and launch_ros are not installed (not on PyPI)'
+    pytest.importorskip('launch_ros', reason=reason)
+    pytest.importorskip('launch.actions', reason=reason)
     spec = importlib.util.spec_from_file_location('world_launch', LAUNCH_FILE)
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
@@ -205,3 +213,61 @@ def test_rviz_true_starts_rviz_with_the_config(launch_module):
     actions = launch_module.start_rviz(context, LaunchConfiguration('namespace'))
     assert [(a.node_package, a.node_executable) for a in actions if isinstance(a, Node)] == [
         ('robot_state_publisher', 'robot_state_publisher'), ('rviz2', 'rviz2')]
+
+
+# --- ros2 launch, as a user runs it ----------------------------------------------------------
+
+
+class Ros2Launch:
+    """`ros2 launch service_tutorial world.launch.py ...`, its output read as it comes."""
+
+    def __init__(self, *arguments):
+        self.lines = []
+        self.process = subprocess.Popen(
+            ['ros2', 'launch', 'service_tutorial', 'world.launch.py', *arguments],
+            stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, start_new_session=True)
+        self.reader = threading.Thread(target=self.lines.extend, args=(self.process.stdout,))
+        self.reader.start()
+
+    def output(self):
+        return ''.join(self.lines)
+
+    def stop(self):
+        """Ctrl-C, as a user stops it; kill whatever is left after 30 s."""
+        self.process.send_signal(signal.SIGINT)
+        try:
+            self.process.wait(timeout=30.0)
+        except subprocess.TimeoutExpired:
+            os.killpg(self.process.pid, signal.SIGKILL)
+            self.process.wait()
+        self.reader.join()
+
+
+def test_ros2_launch_with_every_argument(launch_module, ros, tmp_path):
+    if shutil.which('ros2') is None:
+        pytest.fail('launch_ros is installed but the ros2 command is not on PATH')
+    params_file = tmp_path / 'world.yaml'
+    params_file.write_text('/**/mujoco:\n  ros__parameters:\n    timestep: 0.004\n')
+    launch = Ros2Launch('namespace:=lesson', f'params_file:={params_file}',
+                        'use_sim_time:=false', 'real_time_factor:=0', 'turning_server:=true')
+    try:
+        ready = ('[lesson.mujoco]: MuJoCo world ready: tinybot, timestep 0.004 s, '
+                 'real_time_factor 0.0')
+        assert ros.wait_for(lambda: ready in launch.output(), timeout=60.0), launch.output()
+        models = ros.call(GetModelList, '/lesson/mujoco/get_model_list', GetModelList.Request())
+        assert list(models.model_names) == ['tinybot']
+        for node in ('lesson/mujoco', 'lesson/robot_turning_server'):
+            assert ros.get_parameter(node, 'use_sim_time').bool_value is False, node
+        assert ros.get_parameter('lesson/mujoco', 'real_time_factor').double_value == 0.0
+        started = '[lesson.robot_turning_server]: ==== Robot Turning Server Started ===='
+        assert ros.wait_for(lambda: started in launch.output(), timeout=10.0), launch.output()
+    finally:
+        launch.stop()
+    output = launch.output()
+    assert launch.process.returncode == 0, output
+    for process in ('mujoco_world-1', 'robot_turning_server-2'):
+        assert f'[INFO] [{process}]: process has finished cleanly' in output, output
+    # What the nodes print: information only, no warning, error or traceback.
+    printed = [line for line in output.splitlines()
+               if line.startswith(('[mujoco_world-1]', '[robot_turning_server-2]'))]
+    assert printed and all('] [INFO] [' in line for line in printed), output
