@@ -8,7 +8,6 @@ samples every section measures with.
 import contextlib
 import ctypes
 import os
-import shutil
 import signal
 import subprocess
 import sys
@@ -18,6 +17,7 @@ import time
 
 import yaml
 
+PACKAGE = 'service_tutorial'
 PR_SET_PDEATHSIG = 1  # prctl option, from linux/prctl.h
 
 
@@ -129,10 +129,14 @@ class NodeProcess:
 
     def __init__(self, executable, *, node_name=None, parameters=None, ros_args=(),
                  log_dir=None):
-        path = shutil.which(executable)
-        if path is None:
-            raise BenchmarkError(f'executable {executable!r} is not on PATH: run '
-                                 'scripts/setup and source scripts/env.sh')
+        from ament_index_python.packages import get_package_prefix, PackageNotFoundError
+        try:  # where `ros2 run` finds it, on PATH or not
+            path = os.path.join(get_package_prefix(PACKAGE), 'lib', PACKAGE, executable)
+        except PackageNotFoundError:
+            path = None
+        if path is None or not os.access(path, os.X_OK):
+            raise BenchmarkError(f'executable {executable!r} of {PACKAGE} is not installed: '
+                                 'run scripts/setup and source scripts/env.sh')
         self.executable = executable
         self._log_dir = log_dir or tempfile.mkdtemp(prefix='world_benchmark-')
         args = [path]
