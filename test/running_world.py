@@ -57,15 +57,20 @@ class RunningWorld:
         assert self.ros.wait_for(lambda: self.ticks >= end, timeout=10.0 + 0.1 * count)
 
     def call(self, srv_type, service, request, *, timeout=10.0):
-        """Call a service of the world, /mujoco/<service>, through a client kept for later."""
-        client = self._clients.get(service)
+        """
+        Call a service of the world through a client kept for later.
+
+        service is a lesson service's name under /mujoco/, or a full name ('/spawn_entity').
+        """
+        name = service if service.startswith('/') else '/mujoco/' + service
+        client = self._clients.get(name)
         if client is None:
-            client = self.ros.client_node.create_client(srv_type, '/mujoco/' + service)
-            assert client.wait_for_service(timeout_sec=10.0), f'no /mujoco/{service}'
-            self._clients[service] = client
+            client = self.ros.client_node.create_client(srv_type, name)
+            assert client.wait_for_service(timeout_sec=10.0), f'no {name}'
+            self._clients[name] = client
         future = client.call_async(request)
         assert self.ros.wait_for(future.done, timeout=timeout), \
-            f'/mujoco/{service} did not answer within {timeout} s'
+            f'{name} did not answer within {timeout} s'
         return future.result()
 
     def spawn(self, name, xml, pose=None, frame='', namespace='', *, timeout=10.0):
