@@ -34,6 +34,7 @@ from harness import BenchmarkError, Observer
 from report import machine, targets, write_json
 from round_trips import round_trip_table
 from sensors import sensor_table
+from service_tutorial.testing.isolation import isolate_ros_graph
 from spawn_cost import spawn_cost_table
 from spawn_growth import growth_table
 from speed import speed_tables
@@ -41,9 +42,6 @@ from startup import startup_table
 from turning import turning_tables
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-# The tests' way of keeping a run's ROS graph to itself (test/ is not a package).
-sys.path.insert(0, os.path.join(ROOT, 'test'))
-from ros_isolation import isolate_ros_graph  # noqa: E402, I100
 DEFAULT_JSON = os.path.join(ROOT, 'output', 'benchmark.json')
 
 

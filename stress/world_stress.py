@@ -34,10 +34,9 @@ import textwrap
 import threading
 import time
 
+from service_tutorial.testing.isolation import isolate_ros_graph
+
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-# The tests' way of keeping a run's ROS graph to itself (test/ is not a package).
-sys.path.insert(0, os.path.join(ROOT, 'test'))
-from ros_isolation import isolate_ros_graph  # noqa: E402, I100
 CALL_TIMEOUT = 10.0
 # Cycles whose time and memory are compared, at the start and at the end of the cycle phase.
 WINDOW = 100

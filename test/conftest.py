@@ -12,7 +12,7 @@ import threading
 import time
 
 import pytest
-from ros_isolation import isolate_ros_graph
+from service_tutorial.testing.isolation import isolate_ros_graph
 
 # Before rclpy (and any node a test starts) reads the environment.
 isolate_ros_graph()
