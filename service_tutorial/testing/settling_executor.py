@@ -23,16 +23,21 @@ class SettlingExecutor(SingleThreadedExecutor):
         super().__init__(context=context)
         self._settled = threading.Event()
         self._stopping = False
+        self.failure = None  # what a callback raised: it ended the spinning
         # Ends a wait for work: a test asked whether the nodes settled (one function, kept, so
         # that the executor's generator of ready callbacks is not made anew on every call).
         self._asked = lambda: not self._settled.is_set()
 
     def spin(self):
-        """Run callbacks until shutdown, saying it settled each time nothing is left to run."""
-        while self.context.ok() and not self._stopping:
-            if self._run_ready() == 0:
-                self._settled.set()
-                self._run_one(timeout_sec=None, until=self._asked)
+        """Run callbacks until shutdown or one raises, settling whenever nothing is left."""
+        try:
+            while self.context.ok() and not self._stopping:
+                if self._run_ready() == 0:
+                    self._settled.set()
+                    self._run_one(timeout_sec=None, until=self._asked)
+        except Exception as error:  # kept for the test's thread, which raises it
+            self.failure = error
+            self._settled.set()
 
     def _run_ready(self):
         """Run every callback ready now, from a fresh look at the wait set; return how many."""
@@ -54,10 +59,18 @@ class SettlingExecutor(SingleThreadedExecutor):
         return True
 
     def settle(self, timeout):
-        """Wait until every callback ready now, and any that follows, has run; tell if in time."""
-        self._settled.clear()
-        self.wake()  # a look at what is ready, even if the executor was waiting
-        return self._settled.wait(timeout)
+        """
+        Wait until every callback ready now, and any that follows, has run; tell if in time.
+
+        Raises what a callback raised, if one did: the node stopped there.
+        """
+        if self.failure is None:
+            self._settled.clear()
+            self.wake()  # a look at what is ready, even if the executor was waiting
+            settled = self._settled.wait(timeout)
+        if self.failure is not None:
+            raise self.failure
+        return settled
 
     def shutdown(self, timeout_sec=None):
         """Stop spinning (the spin thread ends) and let the nodes go."""

@@ -98,6 +98,21 @@ def test_step_returns_once_the_added_nodes_handled_what_the_steps_sent(mujoco_si
         assert listener.stamps[-1] == pytest.approx(mujoco_sim.time, abs=1e-9)
 
 
+class BrokenOdometryListener(OdometryListener):
+    """A user's node with a bug: its odometry callback raises."""
+
+    def odom_callback(self, odom):
+        raise ArithmeticError(f'odometry at {seconds_of(odom.header.stamp):.2f} s')
+
+
+def test_what_a_node_of_the_test_raises_comes_out_of_step(mujoco_sim):
+    mujoco_sim.add_node(BrokenOdometryListener(context=mujoco_sim.context))
+    with pytest.raises(ArithmeticError, match='odometry at 0.02 s'):
+        mujoco_sim.step(10)
+    with pytest.raises(ArithmeticError, match='odometry at 0.02 s'):  # the node stopped there
+        mujoco_sim.step(10)
+
+
 @pytest.mark.parametrize('run', ['first', 'second'])
 def test_each_test_gets_a_fresh_world(mujoco_sim, run):
     # Whichever of the two runs second would see what the first left behind.
