@@ -6,7 +6,8 @@ own whose ROS domain no other run on this machine holds, with discovery kept on 
 test's nodes see the world and nothing else does. Its own Context lets it sit beside a test
 suite that has called rclpy.init() already, or one that never does. Time moves only when the
 test says step(n): the world answers once it has taken exactly n steps, and step() returns once
-/clock says so, so what a test asserts does not depend on how fast the machine is.
+/clock says so and the test's own nodes (add_node) have handled what the steps sent them, so
+what a test asserts does not depend on how fast the machine is.
 
 The standard's services (simulation_interfaces) are reached by names relative to the world's
 namespace, through typed helpers for the common ones and call() for any other; a helper raises
@@ -60,7 +61,10 @@ def pose_of(pose):
         return make_pose()
     if hasattr(pose, 'position'):
         return pose
-    values = [float(value) for value in pose]
+    try:
+        values = [float(value) for value in pose]
+    except (TypeError, ValueError):
+        values = []
     if len(values) not in (3, 4):
         raise ValueError(f'a pose is a Pose, (x, y, z) or (x, y, z, yaw): {pose!r}')
     return make_pose(*values[:3], yaw=values[3] if len(values) == 4 else None)

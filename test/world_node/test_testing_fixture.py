@@ -6,7 +6,9 @@ robot did. The README's example runs in test_readme_example.py, and once more he
 runs it: alone, in a pytest of its own that never called rclpy.init().
 """
 
+import math
 import os
+import re
 import shutil
 import subprocess
 import sys
@@ -26,7 +28,7 @@ from service_tutorial.conversions import seconds_of
 from service_tutorial.testing.simulated_world import SimulatedWorld, SimulationCallError
 from service_tutorial.world_node.parameters import ParameterError
 from simulation_interfaces.msg import Result, SimulationState
-from simulation_interfaces.srv import GetSimulationState
+from simulation_interfaces.srv import GetSimulationState, SpawnEntity
 
 pytest_plugins = ['service_tutorial.testing.fixtures']
 
@@ -188,6 +190,16 @@ def test_bad_steps_are_refused_naming_them_and_the_world_stays(mujoco_sim):
             mujoco_sim.step(steps)
     assert mujoco_sim.time == 0.0
     assert mujoco_sim.step(2) == pytest.approx(0.004)
+
+
+def test_a_bad_pose_is_refused_naming_it_and_nothing_is_spawned(mujoco_sim):
+    crate = read_model('red_box', PROPS)
+    with pytest.raises(ValueError, match=re.escape('(1.0, 2.0)')):
+        mujoco_sim.spawn_entity('crate', crate, (1.0, 2.0))
+    with pytest.raises(SimulationCallError, match='nan') as refusal:
+        mujoco_sim.spawn_entity('crate', crate, (math.nan, 0.0, 0.0))
+    assert refusal.value.code == SpawnEntity.Response.INVALID_POSE
+    assert mujoco_sim.get_entities() == ['tinybot']
 
 
 def test_refusals_of_the_world_raise_with_its_code_and_message(mujoco_sim):
