@@ -43,6 +43,9 @@ class Model:
         # since put it back at its spawn pose because it became unstable.
         self.placed = 0
         self.recovered = False
+        # What a client said the model is (the standard interfaces' category, description and
+        # tags), or None until one does; it goes with the model.
+        self.entity_info = None
         # Where its elements are in the compiled model, found again by bind().
         self.root_id = 0
         self.free_qpos_adr = self.free_dof_adr = None
