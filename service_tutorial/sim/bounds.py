@@ -136,8 +136,12 @@ def convex_overlap(first, second):
 
 
 def _closer_simplex(simplex, direction):
-    """Reduce the simplex to the feature nearest the origin; return it, a new direction, and
-    whether it encloses the origin."""
+    """
+    Reduce the simplex to its feature nearest the origin.
+
+    Return that feature, the direction to search next, and whether the simplex encloses the
+    origin.
+    """
     if len(simplex) == 2:
         return _line(simplex)
     if len(simplex) == 3:

@@ -27,7 +27,7 @@ NAMELESS = '<robot><link name="a"/></robot>'
 
 @pytest.fixture
 def world(ros):
-    """The default world (tinybot at the origin), paused, so that states stay put."""
+    """Start the default world, tinybot at the origin, paused so that states stay put."""
     return ros.start_world(paused=True, real_time_factor=0.0)
 
 
@@ -60,7 +60,7 @@ def test_spawn_by_file_uri_inside_a_package_share(world):
 
 @pytest.fixture
 def hostile_package(tmp_path, monkeypatch):
-    """An installed package whose share holds a link to a file outside it, and that file."""
+    """Install a package whose share holds a link to a file outside it; return both."""
     prefix = tmp_path / 'prefix'
     index = prefix / 'share' / 'ament_index' / 'resource_index' / 'packages'
     index.mkdir(parents=True)
@@ -93,65 +93,68 @@ def test_a_uri_is_read_only_from_inside_a_package_share(world, hostile_package):
     assert snapshot(world) == before
 
 
-TINYBOT_NAME_TAKEN = dict(name='tinybot', resource_string=CRATE)
+TINYBOT_NAME_TAKEN = {'name': 'tinybot', 'resource_string': CRATE}
 SPAWN_REFUSALS = [
     (TINYBOT_NAME_TAKEN, SpawnResult.NAME_NOT_UNIQUE,
      "SpawnEntity: an entity named 'tinybot' already exists"),
-    (dict(name='r2/d2', resource_string=CRATE), SpawnResult.NAME_INVALID,
+    ({'name': 'r2/d2', 'resource_string': CRATE}, SpawnResult.NAME_INVALID,
      "SpawnEntity: model name 'r2/d2' must not contain '/'"),
-    (dict(name='', resource_string=NAMELESS), SpawnResult.NAME_INVALID,
+    ({'name': '', 'resource_string': NAMELESS}, SpawnResult.NAME_INVALID,
      'SpawnEntity: the name is empty and the resource names no robot; give a name or allow '
      'renaming'),
-    (dict(name='x' * 300, resource_string=CRATE), SpawnResult.NAME_INVALID,
+    ({'name': 'x' * 300, 'resource_string': CRATE}, SpawnResult.NAME_INVALID,
      'characters) is longer than 64 characters'),
-    (dict(resource_string='<sdf version="1.9"><model name="m"/></sdf>'),
+    ({'resource_string': '<sdf version="1.9"><model name="m"/></sdf>'},
      SpawnResult.UNSUPPORTED_FORMAT,
      'SpawnEntity: resource_string is SDF (root element <sdf>); this world spawns urdf'),
-    (dict(uri='package://service_tutorial/package.xml'), SpawnResult.UNSUPPORTED_FORMAT,
+    ({'uri': 'package://service_tutorial/package.xml'}, SpawnResult.UNSUPPORTED_FORMAT,
      "SpawnEntity: uri 'package://service_tutorial/package.xml' is MJCF; this world spawns "
      'urdf'),
-    (dict(), SpawnResult.NO_RESOURCE, 'SpawnEntity: neither uri nor resource_string is given'),
-    (dict(uri='http://example.com/r2d2.urdf'), SpawnResult.NO_RESOURCE,
+    ({}, SpawnResult.NO_RESOURCE, 'SpawnEntity: neither uri nor resource_string is given'),
+    ({'uri': 'http://example.com/r2d2.urdf'}, SpawnResult.NO_RESOURCE,
      "SpawnEntity: uri 'http://example.com/r2d2.urdf' is neither package://<package>/<path> "
      'nor file://<absolute path>'),
-    (dict(uri='package://no_such_package/r.urdf'), SpawnResult.NO_RESOURCE,
+    ({'uri': 'package://no_such_package/r.urdf'}, SpawnResult.NO_RESOURCE,
      "SpawnEntity: uri 'package://no_such_package/r.urdf': package 'no_such_package' is not "
      'installed'),
-    (dict(uri='package://service_tutorial/../../../../etc/passwd'), SpawnResult.NO_RESOURCE,
+    ({'uri': 'package://service_tutorial/../../../../etc/passwd'}, SpawnResult.NO_RESOURCE,
      "SpawnEntity: uri 'package://service_tutorial/../../../../etc/passwd' must not contain "
      "'..'"),
-    (dict(uri='file:///etc/passwd'), SpawnResult.NO_RESOURCE,
+    ({'uri': 'file:///etc/passwd'}, SpawnResult.NO_RESOURCE,
      "SpawnEntity: uri 'file:///etc/passwd' lies outside the share folders of the installed "
      'packages'),
-    (dict(uri='package://service_tutorial/models/missing.urdf'), SpawnResult.NO_RESOURCE,
+    ({'uri': 'package://service_tutorial/models/missing.urdf'}, SpawnResult.NO_RESOURCE,
      "SpawnEntity: uri 'package://service_tutorial/models/missing.urdf' names no file"),
-    (dict(name='crate', entity_namespace='1robot', resource_string=CRATE),
+    ({'name': 'crate', 'entity_namespace': '1robot', 'resource_string': CRATE},
      SpawnResult.NAMESPACE_INVALID,
      "SpawnEntity: robot namespace '1robot' is not a valid ROS namespace"),
-    (dict(name='crate', resource_string='<robot name="x"><link name="a"></robot>'),
+    ({'name': 'crate', 'resource_string': '<robot name="x"><link name="a"></robot>'},
      SpawnResult.RESOURCE_PARSE_ERROR, 'SpawnEntity: resource_string does not parse as XML'),
-    (dict(name='crate', resource_string='<robot name="x" xmlns:xacro="http://www.ros.org/wiki/'
-          'xacro"><xacro:include filename="/some/file.xacro"/><link name="a"/></robot>'),
+    ({'name': 'crate',
+      'resource_string': '<robot name="x" xmlns:xacro="http://www.ros.org/wiki/xacro">'
+                         '<xacro:include filename="/some/file.xacro"/><link name="a"/></robot>'},
      SpawnResult.RESOURCE_PARSE_ERROR,
      'SpawnEntity: resource_string contains xacro macros, which a spawn never expands'),
-    (dict(name='crate', resource_string='<!DOCTYPE robot SYSTEM "file:///etc/passwd">'
-          '<robot name="x"/>'), SpawnResult.RESOURCE_PARSE_ERROR,
+    ({'name': 'crate',
+      'resource_string': '<!DOCTYPE robot SYSTEM "file:///etc/passwd"><robot name="x"/>'},
+     SpawnResult.RESOURCE_PARSE_ERROR,
      'SpawnEntity: resource_string contains a DOCTYPE or ENTITY declaration, which is refused'),
-    (dict(name='crate', resource_string=CRATE + ' ' * (11 * 1024 * 1024)),
+    ({'name': 'crate', 'resource_string': CRATE + ' ' * (11 * 1024 * 1024)},
      SpawnResult.RESOURCE_PARSE_ERROR,
      f'SpawnEntity: resource_string is {len(CRATE) + 11 * 1024 * 1024} bytes, more than the '
      'limit of 10485760'),
-    (dict(name='crate', resource_string='<robot name="x"><link name="a"><inertial><mass '
-          'value="1"/><inertia ixx="1" iyy="1" izz="3" ixy="0" ixz="0" iyz="0"/></inertial>'
-          '</link></robot>'), SpawnResult.RESOURCE_PARSE_ERROR,
+    ({'name': 'crate',
+      'resource_string': '<robot name="x"><link name="a"><inertial><mass value="1"/><inertia '
+                         'ixx="1" iyy="1" izz="3" ixy="0" ixz="0" iyz="0"/></inertial></link>'
+                         '</robot>'}, SpawnResult.RESOURCE_PARSE_ERROR,
      "SpawnEntity: model 'crate' does not compile: inertia must satisfy"),
-    (dict(name='crate', resource_string=CRATE, initial_pose=stamped(float('nan'), 0.0, 0.5)),
+    ({'name': 'crate', 'resource_string': CRATE, 'initial_pose': stamped(float('nan'), 0.0, 0.5)},
      SpawnResult.INVALID_POSE,
      'SpawnEntity: initial_pose: position contains NaN or infinity: [nan, 0.0, 0.5]'),
-    (dict(name='crate', resource_string=CRATE, initial_pose=stamped(
-        0.0, 0.0, 0.5, quaternion=(0.0, 0.0, 0.0, 0.0))), SpawnResult.INVALID_POSE,
+    ({'name': 'crate', 'resource_string': CRATE, 'initial_pose': stamped(
+        0.0, 0.0, 0.5, quaternion=(0.0, 0.0, 0.0, 0.0))}, SpawnResult.INVALID_POSE,
      'SpawnEntity: initial_pose: orientation quaternion is zero: [0.0, 0.0, 0.0, 0.0]'),
-    (dict(name='crate', resource_string=CRATE, initial_pose=stamped(frame='nowhere')),
+    ({'name': 'crate', 'resource_string': CRATE, 'initial_pose': stamped(frame='nowhere')},
      SpawnResult.INVALID_POSE, "SpawnEntity: initial_pose names frame 'nowhere', which is "
      'neither the world nor an entity'),
 ]

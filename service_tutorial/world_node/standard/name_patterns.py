@@ -1,4 +1,4 @@
-"""
+r"""
 POSIX extended regular expressions on entity names, matched in time linear in the name.
 
 The standard's name filter is a POSIX ERE. Python's `re` reads another dialect and backtracks:
@@ -7,7 +7,7 @@ Thompson automaton (all threads in step), so no pattern can hang the world. Supp
 characters, '.', bracket expressions with ranges, negation and the classes [:alpha:] and the
 like, '^', '$', groups, '|', and the repetitions '*', '+', '?', '{m}', '{m,}' and '{m,n}'; a
 backslash makes the next special character ordinary. Refused with a message: Python-only
-syntax such as '(?', '\\d' or lazy '*?', and patterns too long or too large to run.
+syntax such as '(?', '\d' or lazy '*?', and patterns too long or too large to run.
 A name matches when the pattern matches some part of it, as regexec does: anchor it with '^'
 and '$' to match whole names.
 """
@@ -218,7 +218,7 @@ class _Parser:
         least = int(low)
         most = least if not comma else (int(high) if high else None)
         if max(least, most or 0) > MAX_REPEAT or (most is not None and most < least):
-            self.fail(f"interval {{{text}}} must have counts up to {MAX_REPEAT}, the first "
+            self.fail(f'interval {{{text}}} must have counts up to {MAX_REPEAT}, the first '
                       'not above the second')
         self.position = closing + 1
         return least, most
