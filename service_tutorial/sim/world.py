@@ -359,11 +359,12 @@ class World:
         frame = self._frame_state(reference_frame)
         return frames.expressed_in(frame, self.body_state(model.root_id))
 
-    def get_model_acceleration(self, name):
-        """Return the linear and angular acceleration of a model's base link in the world."""
-        model = self._spawned(name)
-        self.body_state(model.root_id)  # brings the kinematics up to date
-        return frames.body_acceleration(self._model, self._data, model.root_id)
+    def get_model_accelerations(self, names):
+        """Return (linear, angular) acceleration of each model's base link in the world."""
+        roots = [self._spawned(name).root_id for name in names]
+        for root in roots[:1]:
+            self.body_state(root)  # brings the kinematics up to date
+        return frames.body_accelerations(self._model, self._data, roots)
 
     def set_model_state(self, name, *, position, orientation, linear_velocity=(0.0, 0.0, 0.0),
                         angular_velocity=(0.0, 0.0, 0.0), reference_frame=''):

@@ -258,7 +258,8 @@ class MujocoWorld(Node):
         Add the models of several SpawnOrders with one recompile, each with its ROS interface.
 
         namespaces: each model's normalised namespace. Return, for each order, what the world
-        left out of its model ('' for nothing) or the WorldError that refused it.
+        left out of its model ('' for nothing) or the exception that refused it (a WorldError
+        unless a bug).
         """
         outcomes = self.world.spawn_urdf_batch(orders)
         for index, (order, namespace) in enumerate(zip(orders, namespaces)):
@@ -266,7 +267,7 @@ class MujocoWorld(Node):
                 try:
                     self._give_interface(outcomes[index], namespace, order.urdf_xml)
                     outcomes[index] = left_out_of(outcomes[index].description)
-                except WorldError as error:
+                except Exception as error:  # the model is gone again; the others go on
                     outcomes[index] = error
         if self.viewer is not None:
             self._open_viewer()

@@ -15,11 +15,11 @@ from service_tutorial.sim import validation
 from service_tutorial.sim.validation import DescriptionError, quoted, WorldError
 from service_tutorial.world_node.standard.entity_filters import EntityFilter
 from service_tutorial.world_node.standard.entity_messages import CATEGORIES, entity_info
+from service_tutorial.world_node.standard.entity_messages import entity_states
 from service_tutorial.world_node.standard.entity_messages import fill_entity_bounds
-from service_tutorial.world_node.standard.entity_messages import fill_entity_state
 from service_tutorial.world_node.standard.results import answer, Refusal
 from service_tutorial.world_node.standard.spawn_requests import SpawnPlanner
-from simulation_interfaces.msg import EntityCategory, EntityInfo, EntityState, Result
+from simulation_interfaces.msg import EntityCategory, EntityInfo, Result
 from simulation_interfaces.msg import SimulatorFeatures, SpawnResult
 from simulation_interfaces.srv import DeleteEntity, GetEntities, GetEntitiesStates
 from simulation_interfaces.srv import GetEntityBounds, GetEntityInfo, GetEntityState
@@ -144,8 +144,7 @@ class EntityServices:
         """List the entities that pass every filter with their states in the world frame."""
         def listed():
             names = self._filtered(request.filters)
-            response.states = [fill_entity_state(EntityState(), self.world, name)
-                               for name in names]
+            response.states = entity_states(self.world, names)
             response.entities = names
         answer(self.node, 'GetEntitiesStates', response.result, listed)
         return response
@@ -154,7 +153,7 @@ class EntityServices:
         """Report an entity's pose, twist and acceleration in the world frame."""
         def read():
             self._model(request.entity)
-            fill_entity_state(response.state, self.world, request.entity)
+            response.state, = entity_states(self.world, [request.entity])
         answer(self.node, 'GetEntityState', response.result, read)
         return response
 

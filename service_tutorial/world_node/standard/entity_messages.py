@@ -3,7 +3,7 @@
 from geometry_msgs.msg import Vector3
 from service_tutorial.conversions import fill_pose_msg, fill_time_msg, fill_twist_msg
 from service_tutorial.sim import bounds
-from simulation_interfaces.msg import Bounds, EntityCategory, EntityInfo
+from simulation_interfaces.msg import Bounds, EntityCategory, EntityInfo, EntityState
 
 CATEGORIES = {
     EntityCategory.CATEGORY_OBJECT: 'CATEGORY_OBJECT',
@@ -30,16 +30,19 @@ def entity_info(model):
     return EntityInfo(category=EntityCategory(category=default_category(model)))
 
 
-def fill_entity_state(state, world, name):
-    """Write a model's state in the world frame into an EntityState and return it."""
-    pose = world.get_model_state(name)
-    linear_acceleration, angular_acceleration = world.get_model_acceleration(name)
-    fill_time_msg(state.header.stamp, world.time)
-    state.header.frame_id = 'world'
-    fill_pose_msg(state.pose, pose.position, pose.orientation)
-    fill_twist_msg(state.twist, pose.linear_velocity, pose.angular_velocity)
-    fill_twist_msg(state.acceleration, linear_acceleration, angular_acceleration)
-    return state
+def entity_states(world, names):
+    """Return the EntityState of each named model, in the world frame."""
+    states = []
+    for name, (linear, angular) in zip(names, world.get_model_accelerations(names)):
+        pose = world.get_model_state(name)
+        state = EntityState()
+        fill_time_msg(state.header.stamp, world.time)
+        state.header.frame_id = 'world'
+        fill_pose_msg(state.pose, pose.position, pose.orientation)
+        fill_twist_msg(state.twist, pose.linear_velocity, pose.angular_velocity)
+        fill_twist_msg(state.acceleration, linear, angular)
+        states.append(state)
+    return states
 
 
 def fill_entity_bounds(message, world, model):
