@@ -60,7 +60,7 @@ def test_spawn_by_file_uri_inside_a_package_share(world):
 
 @pytest.fixture
 def hostile_package(tmp_path, monkeypatch):
-    """Install a package whose share holds a link to a file outside it; return both."""
+    """Install a package with a URDF, a xacro file and a link to a file outside its share."""
     prefix = tmp_path / 'prefix'
     index = prefix / 'share' / 'ament_index' / 'resource_index' / 'packages'
     index.mkdir(parents=True)
@@ -71,18 +71,30 @@ def hostile_package(tmp_path, monkeypatch):
     outside.write_text(CRATE)
     (share / 'escape.urdf').symlink_to(outside)
     (share / 'crate.urdf').write_text(CRATE)
+    crate_link = CRATE[CRATE.index('<link'):CRATE.index('</robot>')]
+    (share / 'tower.urdf.xacro').write_text(
+        '<robot name="tower" xmlns:xacro="http://www.ros.org/wiki/xacro">'
+        '<xacro:property name="side" value="0.3"/>'
+        + crate_link.replace('0.4 0.4 0.4', '${side} ${side} 1.0') + '</robot>')
     monkeypatch.setenv('AMENT_PREFIX_PATH',
                        f'{prefix}{os.pathsep}{os.environ.get("AMENT_PREFIX_PATH", "")}')
     return share, outside
 
 
 def test_a_uri_is_read_only_from_inside_a_package_share(world, hostile_package):
+    """Spawn from a package share, expanding a xacro file; refuse every way out of it."""
     share, outside = hostile_package
     assert spawn_or_fail(world, uri='package://hostile_pkg/crate.urdf',
                          initial_pose=stamped(3.0, 0.0, 0.3)) == 'crate'
+    # An installed xacro file is expanded, as a launch file would expand it.
+    assert spawn_or_fail(world, uri='package://hostile_pkg/tower.urdf.xacro',
+                         initial_pose=stamped(-3.0, 0.0, 0.5)) == 'tower'
+    tower = world.call(GetEntityBounds, '/get_entity_bounds',
+                       GetEntityBounds.Request(entity='tower')).bounds.points
+    assert close((tower[1].x, tower[1].y, tower[1].z), (0.15, 0.15, 0.5))
     before = snapshot(world)
     for uri, message in [
-            (f'file://{outside}', f"uri 'file://{outside}' lies outside the share folders"),
+            (f'file://{outside}', 'lies outside the share folders of the installed packages'),
             ('package://hostile_pkg/escape.urdf', "uri 'package://hostile_pkg/escape.urdf' "
              'leads outside the share folder of its package'),
             (f'file://{share}/escape.urdf', 'leads outside the share folder'),
