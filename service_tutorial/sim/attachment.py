@@ -17,9 +17,13 @@ class CompileError(RuntimeError):
     """MuJoCo would not compile the edited spec; the message is its reason on one line."""
 
 
-def attach(spec, mj_model, data, model):
-    """Attach a model to the live spec; return the recompiled MjModel and MjData."""
-    model.attach(spec)
+def attach(spec, mj_model, data, models):
+    """Attach models to the live spec with one recompile; return the new MjModel and MjData."""
+    try:
+        for model in models:
+            model.attach(spec)
+    except Exception as error:  # the world builds its spec afresh, as for a failed compile
+        raise CompileError(compile_error(error)) from None
     kept = {field: getattr(data, field).copy() for field in STATE_FIELDS}
     return _recompile(spec, mj_model, data, kept)
 

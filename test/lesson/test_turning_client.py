@@ -1,7 +1,7 @@
 """The turning client program against a real turning server (input rules: test_turning_input)."""
 
 from geometry_msgs.msg import Twist
-from programs import run_program
+from programs import program_path, run_program
 import pytest
 from service_tutorial.lesson.robot_turning_server import RobotTurningServer
 from service_tutorial.lesson.turning_limits import DURATION_PROMPT, NOT_A_NUMBER
@@ -19,7 +19,6 @@ def test_prompted_client_sends_the_first_valid_pair(ros):
     assert finished.returncode == 0, finished.stderr
     assert finished.stdout.count(DURATION_PROMPT) == 3
     assert NOT_A_NUMBER in finished.stderr and VELOCITY_TOO_HIGH in finished.stderr
-    assert 'waiting for /control_robot_angle' in finished.stderr
     assert finished.stdout.rstrip().endswith('success: True')
     assert ros.wait_for(lambda: cmd_vel and cmd_vel[-1] == Twist())
     assert {msg.angular.z for msg in cmd_vel} == {0.25, 0.0}
@@ -36,3 +35,15 @@ def test_client_with_arguments_sends_without_prompting(ros):
     assert finished.stdout.strip() == 'success: True'
     assert ros.wait_for(lambda: cmd_vel and cmd_vel[-1] == Twist())
     assert {msg.angular.z for msg in cmd_vel} == {-0.3, 0.0}
+
+
+def test_client_started_before_the_server_says_it_waits_then_sends(ros, start_program):
+    client = start_program([program_path('robot_turning_client'), '1', '0.2'])
+    waiting = client.stderr.readline()  # the server does not exist yet: it must wait
+    assert 'waiting for /control_robot_angle' in waiting, waiting
+
+    ros.add_node(RobotTurningServer())
+
+    stdout, stderr = client.communicate(timeout=30)
+    assert client.returncode == 0, stderr
+    assert stdout.strip() == 'success: True'
