@@ -169,14 +169,24 @@ class Pacer:
             yield steps
             behind -= steps
 
-    def _free_running_chunks(self, sim_time, other_due):
+    def requested_chunks(self, count, sim_time, other_due=lambda: math.inf):
+        """
+        Yield the step counts of one tick of stepping a paused world on request.
+
+        As free-running, as fast as the machine can: a tick steps count steps at most and for
+        no longer than its budget of wall time, so that services are answered in between.
+        """
+        yield from self._free_running_chunks(sim_time, other_due, count)
+
+    def _free_running_chunks(self, sim_time, other_due, limit=math.inf):
         budget = min(MAX_STEP_BUDGET, max(STEP_BUDGET, EXECUTOR_SHARE * self.executor_turn))
         deadline = self._wall_clock() + budget
-        while True:
+        while limit > 0:
             start = self._wall_clock()
             if start >= deadline:
                 return
-            steps = self.free_running_chunk(sim_time(), start, deadline, other_due())
+            steps = min(limit, self.free_running_chunk(sim_time(), start, deadline, other_due()))
+            limit -= steps
             yield steps
             self.step_wall_time += 0.5 * (
                 (self._wall_clock() - start) / steps - self.step_wall_time)
