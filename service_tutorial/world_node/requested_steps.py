@@ -4,7 +4,8 @@ Stepping a paused world on request: exactly N steps, taken by the step timer tic
 A request (StepSimulation, the SimulateSteps action) gets a budget of wall time per tick of the
 node's step timer (Pacer.requested_chunks), so the world's other services are answered between
 two ticks however many steps were asked for; what falls due on the way (/clock, odometry, joint
-states, sensors) is published as in normal stepping. One request runs at a time. Its future
+states, sensors) is published as when free-running (held to its rate in wall time too), and
+the time, odometry and joint states where the steps end. One request runs at a time. Its future
 completes with None once every step is taken, or with a sentence that says why it ended early
 and after how many steps. The world stays paused throughout.
 """
@@ -12,9 +13,12 @@ and after how many steps. The world stays paused throughout.
 import time
 
 from rclpy.task import Future
+from service_tutorial.world_node.pacing import JOINT_STATES_STREAM, ODOMETRY_STREAM
 
 # Wall time between two progress reports of a request, in s: 10 Hz, and one at the end.
 PROGRESS_PERIOD = 0.1
+# The streams that carry the models' state: published where a request's steps end.
+STATE_STREAMS = (ODOMETRY_STREAM, JOINT_STATES_STREAM)
 
 
 class StepRequest:
@@ -80,16 +84,23 @@ class RequestedSteps:
         if request.cancelled():
             self.stop('cancelled')
             return
-        world = node.world
-        for steps in node.pacer.requested_chunks(request.remaining, lambda: world.time,
-                                                 lambda: node.camera_stream.next_due):
-            world.step(steps, even_if_paused=True)
-            request.taken += steps
-            node.publish_due()
+        world, pacer = node.world, node.pacer
+        pacer.step_on_request(True)
+        try:
+            for steps in pacer.requested_chunks(request.remaining, lambda: world.time,
+                                                lambda: node.camera_stream.next_due):
+                world.step(steps, even_if_paused=True)
+                request.taken += steps
+                node.publish_due()
+        finally:
+            pacer.step_on_request(False)
         if request.remaining > 0:
             request.report_progress()
             return
-        node.publish_clock()  # the time the steps ended at, whatever the rate of /clock
+        # Where the steps ended, whatever the streams' rates: the time, odometry, joint states.
+        node.publish_clock()
+        pacer.restart(world.time, STATE_STREAMS)
+        node.publish_due()
         self.current = None
         request.end()
 

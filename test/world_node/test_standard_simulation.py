@@ -336,13 +336,13 @@ def test_a_driven_tinybot_moves_as_in_normal_stepping_with_its_odometry(paused_w
     np.testing.assert_allclose(position(world), reference.get_model_state('tinybot').position,
                                atol=1e-9)
     assert np.linalg.norm(position(world)[:2]) > 0.1
-    # Odometry went out on its turns of simulation time, up to the last step. (A burst of
-    # them may lose its first ones to the publisher's queue of 10.)
+    # Odometry went out on the way, as free-running (held to 50 Hz of wall time too), and
+    # where the steps ended.
     assert world.ros.wait_for(lambda: seconds_of(odometry[-1].header.stamp) == pytest.approx(
         end, abs=1e-9))
     stamps = np.array([seconds_of(message.header.stamp) for message in odometry[before:]])
-    steps_between = np.diff(np.round(stamps / TIMESTEP).astype(int))
-    assert len(stamps) >= 10 and all(steps_between > 0) and not any(steps_between % 10)
+    assert all(np.diff(stamps) > 0)
+    np.testing.assert_allclose(stamps / TIMESTEP, np.round(stamps / TIMESTEP), atol=1e-6)
 
 
 @pytest.mark.parametrize('steps, named', [(0, '0'), (LONGEST, str(LONGEST))])
