@@ -11,9 +11,9 @@ rather than through matched events: each event handler is one more entity every 
 waits on, and with four per robot a fleet of 50 ran a quarter slower.
 Free-running (real_time_factor 0, or a paused world's steps on request), a sensor is also held
 to its rate in wall time, as the world node holds every stream: far faster than real time, a
-5 Hz laser would otherwise cast and publish hundreds of scans per wall second. Topics land where gazebo_ros puts them
-(ros_names.plugin_topic); frames are the block's frameName (ROS 1) or frame_name (ROS 2), else
-the sensor's link.
+5 Hz laser would otherwise cast and publish hundreds of scans per wall second. Topics land
+where gazebo_ros puts them (ros_names.plugin_topic); frames are the block's frameName (ROS 1)
+or frame_name (ROS 2), else the sensor's link.
 """
 
 import math
