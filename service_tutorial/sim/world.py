@@ -12,7 +12,6 @@ import os
 import types
 
 import mujoco
-import numpy as np
 from service_tutorial.sim import attachment
 from service_tutorial.sim import frames
 from service_tutorial.sim import plugins
@@ -21,7 +20,6 @@ from service_tutorial.sim import spawning
 from service_tutorial.sim import validation
 from service_tutorial.sim.core_logs import core_logger
 from service_tutorial.sim.description_cache import DescriptionCache
-from service_tutorial.sim.frames import ModelState
 from service_tutorial.sim.model import Model
 from service_tutorial.sim.recovery import Recovery
 from service_tutorial.sim.recovery import take_steps
@@ -321,11 +319,7 @@ class World:
         self._reset(keep_time=True)
 
     def reset_time(self):
-        """
-        Put time back to zero; every model stays where it is, moving as it moved.
-
-        What plugins scheduled lies in the old time: they start again, drives without command.
-        """
+        """Put time back to zero, models as they are; plugins start again, drives uncommanded."""
         self._data.time = 0.0
         for model in self._models.values():
             model.reset_plugins()
@@ -381,17 +375,9 @@ class World:
                         angular_velocity=(0.0, 0.0, 0.0), reference_frame=''):
         """Move a model's base link to a pose and twist given in reference_frame."""
         model = self._spawned(name)
-        relative = ModelState(
-            position=validation.position(position),
-            orientation=validation.unit_quaternion(orientation),
-            linear_velocity=validation.vector(linear_velocity, 3, 'linear_velocity'),
-            angular_velocity=validation.vector(angular_velocity, 3, 'angular_velocity'))
-        validation.check_velocity(relative.linear_velocity, 'linear_velocity', name)
-        validation.check_velocity(relative.angular_velocity, 'angular_velocity', name)
-        if model.anchored and (np.any(relative.linear_velocity)
-                               or np.any(relative.angular_velocity)):
-            raise WorldError(f"model '{name}' is anchored to the world; it cannot be given "
-                             'a velocity')
+        relative = frames.checked_state(
+            name, model.anchored, position=position, orientation=orientation,
+            linear_velocity=linear_velocity, angular_velocity=angular_velocity)
         model.place(self._model, self._data,
                     frames.in_world(self._frame_state(reference_frame), relative))
         model.mark_placed()
