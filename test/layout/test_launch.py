@@ -19,6 +19,7 @@ import threading
 from ament_index_python.packages import get_package_share_directory
 import pytest
 from repository import ROOT
+from simulation_interfaces.srv import GetEntities
 from srv_interfaces.srv import GetModelList
 import yaml
 
@@ -256,6 +257,9 @@ def test_ros2_launch_with_every_argument(launch_module, ros, tmp_path):
         assert ros.wait_for(lambda: ready in launch.output(), timeout=60.0), launch.output()
         models = ros.call(GetModelList, '/lesson/mujoco/get_model_list', GetModelList.Request())
         assert list(models.model_names) == ['tinybot']
+        # The standard's services move with the namespace, as everything does.
+        entities = ros.call(GetEntities, '/lesson/get_entities', GetEntities.Request())
+        assert list(entities.entities) == ['tinybot']
         for node in ('lesson/mujoco', 'lesson/robot_turning_server'):
             assert ros.get_parameter(node, 'use_sim_time').bool_value is False, node
         assert ros.get_parameter('lesson/mujoco', 'real_time_factor').double_value == 0.0
