@@ -252,12 +252,12 @@ class World:
         """Let physics run again."""
         self._paused = False
 
-    def step(self, count=1):
-        """Advance count physics steps unless paused; return the number of steps taken."""
+    def step(self, count=1, *, even_if_paused=False):
+        """Advance count physics steps unless paused or even_if_paused; return the steps taken."""
         count = int(count)
         if count < 0:
             raise WorldError(f'step count must not be negative: {count}')
-        if self._paused or count == 0:
+        if (self._paused and not even_if_paused) or count == 0:
             return 0
         remaining = count
         while remaining > 0:
@@ -298,6 +298,17 @@ class World:
     def reset_world(self):
         """Put every model back to its spawn pose at rest; time goes on."""
         self._reset(keep_time=True)
+
+    def reset_time(self):
+        """
+        Put time back to zero; every model stays where it is, moving as it moved.
+
+        What plugins scheduled lies in the old time: they start again, drives without command.
+        """
+        self._data.time = 0.0
+        for model in self._models.values():
+            model.reset_plugins()
+        self.schedule_events()
 
     def _reset(self, keep_time):
         time = self._data.time

@@ -2,14 +2,16 @@
 The MuJoCo world node: the Gazebo of this tutorial.
 
 It steps a service_tutorial.sim.world.World, serves the world services under /mujoco/
-(gazebo_services.py) and publishes /clock; each model's own topics (cmd_vel, odom and
-joint_states of a diff drive, its odometry on /tf) come from the faces of its ModelInterface,
-made when the model is spawned, and a model with topics also gets its URDF on
-robot_description. A Pacer decides how far each tick steps and
-which streams are due. Stepping runs in a timer of the node's single callback group, so a
-service callback, a parameter change and a physics step never run at the same time and no locks
-are needed. Each tick first takes the velocity commands that came since the last one: they
-never wake the executor (taken_at_tick.py).
+(gazebo_services.py) and the standard simulation interfaces beside them (standard/), and
+publishes /clock; each model's own topics (cmd_vel, odom and joint_states of a diff drive, its
+odometry on /tf) come from the faces of its ModelInterface, made when the model is spawned,
+and a model with topics also gets its URDF on robot_description. A Pacer decides how far each
+tick steps and which streams are due. Stepping runs in a timer of the node's default callback
+group, so a service callback, a parameter change and a physics step never run at the same time
+and no locks are needed. Each tick first takes the velocity commands that came since the last
+one: they never wake the executor (taken_at_tick.py). A paused world steps only when a client
+asks for N steps (requested_steps.py): the timer takes them, a share of every tick, while the
+client's call waits in a callback group of its own.
 
 The parameters are declared in parameters.py, and every one that is not read-only takes
 effect as soon as it is set. What the simulation logs reaches the node's logger (and /rosout).
@@ -25,6 +27,7 @@ from rclpy.event_handler import PublisherEventCallbacks
 from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+from rclpy.task import Future
 from rosgraph_msgs.msg import Clock
 from service_tutorial.conversions import fill_time_msg
 from service_tutorial.robot_files import file_model_name, read_robot_file
@@ -36,7 +39,11 @@ from service_tutorial.world_node.model_interface import ModelInterface
 from service_tutorial.world_node.pacing import CLOCK_STREAM, JOINT_STATES_STREAM
 from service_tutorial.world_node.pacing import ODOMETRY_STREAM, Pacer
 from service_tutorial.world_node.parameters import declare_world_parameters, run_or_exit
+from service_tutorial.world_node.requested_steps import RequestedSteps
 from service_tutorial.world_node.ros_names import normalise_namespace
+from service_tutorial.world_node.standard.features import FeatureService
+from service_tutorial.world_node.standard.simulation import SimulationServices
+from service_tutorial.world_node.standard.stepping import SteppingServices
 from service_tutorial.world_node.tf_publishing import RobotDescriptionPublisher, TransformBatch
 
 PACKAGE = 'service_tutorial'
@@ -119,6 +126,8 @@ class MujocoWorld(Node):
         self._next_face_look = 0.0  # wall time
         self.robot_descriptions = {}  # name -> RobotDescriptionPublisher, models with topics
         self.viewer = None
+        self.requested_steps = RequestedSteps(self)  # StepSimulation, SimulateSteps
+        self.quitting = Future()  # done when a client asks the world to quit: main() ends
 
         # Reliable and transient local, /clock suits every subscriber's QoS: rclpy's default
         # handlers of incompatible QoS would only add to every executor turn's wait set.
@@ -128,6 +137,10 @@ class MujocoWorld(Node):
         self.tf_batch = TransformBatch(self)  # /tf, for every drive's OdomTfFace
         # The lesson's world services under ~/ (/mujoco/ by default), as gazebo_ros serves them.
         self.gazebo_services = GazeboServices(self)
+        # The standard's services, relative to the node's namespace (/reset_simulation...).
+        simulation = SimulationServices(self)
+        self.standard_groups = [simulation, SteppingServices(self, simulation)]
+        self.feature_service = FeatureService(self, self.standard_groups)
         # ~/camera/image_raw, ~/camera/camera_info (camera_enabled) and ~/save_snapshot.
         self.camera_stream = CameraStream(self, self.world, parameters)
 
@@ -135,6 +148,8 @@ class MujocoWorld(Node):
             robot_file = read_robot_file(path)
             self.spawn_model(name, robot_file.urdf, namespace, position, orientation, '',
                              base_dir=robot_file.base_dir)
+        # What a reset of spawned entities keeps: these very models, not others by their names.
+        self.start_up_models = frozenset(self.world.models.values())
         if parameters['paused']:
             self.world.pause()
         if parameters['gui']:
@@ -172,6 +187,7 @@ class MujocoWorld(Node):
         if changes['paused']:
             self.world.pause()
         else:
+            self.requested_steps.stop('set playing')
             self.world.unpause()
             self.pacer.anchor(self.world.time)
 
@@ -187,10 +203,13 @@ class MujocoWorld(Node):
         pacer.start_tick()
         for model in self.models.values():
             model.take_commands()  # they never wake the executor: see taken_at_tick.py
-        period_ns = pacer.tick_period_ns(world.paused)
+        stepping = self.requested_steps
+        period_ns = 0 if stepping.busy else pacer.tick_period_ns(world.paused)
         if self.step_timer.timer_period_ns != period_ns:
             self.step_timer.timer_period_ns = period_ns
         if world.paused:
+            if stepping.busy:
+                stepping.tick()
             pacer.anchor(world.time)
             if pacer.repeat_due():  # the same time again, for a late joiner
                 self.publish_clock()
@@ -316,12 +335,16 @@ class MujocoWorld(Node):
 
 
 def main(args=None):
-    """Run the MuJoCo world until Ctrl-C; a bad parameter ends it with one line, status 2."""
+    """
+    Run the MuJoCo world until Ctrl-C or a client asks it to quit, then end with status 0.
+
+    A bad parameter ends it with one line, status 2.
+    """
     rclpy.init(args=args)
     world = None
     try:
         world = run_or_exit('mujoco_world', MujocoWorld)
-        rclpy.spin(world)
+        rclpy.spin_until_future_complete(world, world.quitting)
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
     finally:

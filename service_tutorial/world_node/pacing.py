@@ -22,6 +22,9 @@ MAX_REAL_TIME_PERIOD, and no more than MAX_TICK_SIMULATED of simulated time apar
 there is nothing to step and ticks come every PAUSED_TICK_PERIOD, and /clock is said again
 every PAUSED_CLOCK_PERIOD of wall time (repeat_due), so that a late joiner learns the time.
 
+A paused world steps only on request (StepSimulation): a tick then steps as free-running does,
+up to the count asked for (step_on_request, requested_chunks).
+
 While a spawn or a delete keeps the world busy, simulation time stands still (hold), as in
 Gazebo; the world does not run fast afterwards to make up for it.
 
@@ -64,7 +67,7 @@ class Pacer:
         """Pace a world of this timestep; periods maps each stream's name to its period (s)."""
         self.timestep = timestep
         self.real_time_factor = max(0.0, real_time_factor)
-        self.free_running = self.real_time_factor == 0.0
+        self._on_request = False
         self._periods = dict(periods)
         self._state_streams = [name for name in self._periods if name not in TIME_ONLY_STREAMS]
         self._next_sim = dict.fromkeys(self._periods, 0.0)
@@ -80,6 +83,22 @@ class Pacer:
         self._next_repeat = 0.0
 
     # --- ticks --------------------------------------------------------------------------------
+
+    @property
+    def free_running(self):
+        """Tell whether the world steps as fast as it can: factor 0, or steps on request."""
+        return self.real_time_factor == 0.0 or self._on_request
+
+    def step_on_request(self, on):
+        """
+        Pace a paused world's steps on request as free-running (on), or end that.
+
+        Whatever the real-time factor, steps on request go as fast as the machine can, and so
+        every stream is held to its rate in wall time too, as free-running.
+        """
+        self._on_request = on
+        if not on:  # wall-time turns only hold streams back while free-running
+            self._next_wall = dict.fromkeys(self._periods, 0.0)
 
     @property
     def first_tick_period(self):
@@ -107,7 +126,6 @@ class Pacer:
     def set_real_time_factor(self, real_time_factor, sim_time):
         """Run at another pace (0: free-running) from simulation time sim_time on."""
         self.real_time_factor = max(0.0, real_time_factor)
-        self.free_running = self.real_time_factor == 0.0
         # Wall-time turns only hold streams back while free-running.
         self._next_wall = dict.fromkeys(self._periods, 0.0)
         self.anchor(sim_time)
@@ -169,14 +187,24 @@ class Pacer:
             yield steps
             behind -= steps
 
-    def _free_running_chunks(self, sim_time, other_due):
+    def requested_chunks(self, count, sim_time, other_due=lambda: math.inf):
+        """
+        Yield the step counts of one tick of a paused world's steps on request (step_on_request).
+
+        As free-running: a tick takes count steps at most, and for no longer than its budget of
+        wall time, so that services are answered in between.
+        """
+        yield from self._free_running_chunks(sim_time, other_due, count)
+
+    def _free_running_chunks(self, sim_time, other_due, limit=math.inf):
         budget = min(MAX_STEP_BUDGET, max(STEP_BUDGET, EXECUTOR_SHARE * self.executor_turn))
         deadline = self._wall_clock() + budget
-        while True:
+        while limit > 0:
             start = self._wall_clock()
             if start >= deadline:
                 return
-            steps = self.free_running_chunk(sim_time(), start, deadline, other_due())
+            steps = min(limit, self.free_running_chunk(sim_time(), start, deadline, other_due()))
+            limit -= steps
             yield steps
             self.step_wall_time += 0.5 * (
                 (self._wall_clock() - start) / steps - self.step_wall_time)

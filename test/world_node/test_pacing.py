@@ -275,3 +275,27 @@ def test_a_paused_world_says_its_time_again_every_paused_clock_period():
     assert not pacer.repeat_due()
     wall.now += 0.001
     assert pacer.repeat_due()
+
+
+@pytest.mark.parametrize('real_time_factor', [0.0, 1.0])
+def test_steps_on_request_go_free_running_and_stop_at_the_count(real_time_factor):
+    pacer, world, wall, _ = make(real_time_factor, step_cost=1e-5)
+
+    def requested_tick(count):
+        before = world.steps
+        pacer.step_on_request(True)
+        for steps in pacer.requested_chunks(count, lambda: world.time):
+            world.steps += steps
+            wall.now += steps * world.step_cost
+            world.publish_due()
+        pacer.step_on_request(False)
+        return world.steps - before
+    # 5 ms of wall time at 10 us a step, whatever the real-time factor: 500 of 10**6 steps,
+    # with streams held to their rates in wall time, as free-running.
+    assert requested_tick(10 ** 6) == pytest.approx(500, abs=10)
+    assert world.published['clock'] == [1, 401] and world.published['odom'] == [1]
+    assert requested_tick(2 ** 64 - 1) == pytest.approx(500, abs=10)
+    before = world.steps
+    assert requested_tick(7) == 7 and world.steps == before + 7
+    # Done, the pace is the real-time factor's again.
+    assert pacer.free_running is (real_time_factor == 0.0)

@@ -9,11 +9,11 @@ measured or built for a topic nobody listens to. It looks for subscribers a few 
 second (subscribers.py), when the world node has it look (at most every FACE_LOOK_PERIOD),
 rather than through matched events: each event handler is one more entity every executor turn
 waits on, and with four per robot a fleet of 50 ran a quarter slower.
-Free-running (real_time_factor 0), a sensor is also held to its rate in wall time, as the
-world node holds every stream: far faster than real time, a 5 Hz laser would otherwise cast
-and publish hundreds of scans per wall second. Topics land where gazebo_ros puts them
-(ros_names.plugin_topic); frames are the block's frameName (ROS 1) or frame_name (ROS 2), else
-the sensor's link.
+Free-running (real_time_factor 0, or a paused world's steps on request), a sensor is also held
+to its rate in wall time, as the world node holds every stream: far faster than real time, a
+5 Hz laser would otherwise cast and publish hundreds of scans per wall second. Topics land
+where gazebo_ros puts them (ros_names.plugin_topic); frames are the block's frameName (ROS 1)
+or frame_name (ROS 2), else the sensor's link.
 """
 
 import math
@@ -92,9 +92,8 @@ class SensorFace(PluginFace):
     def reading_callback(self, sensor):
         """Publish a reading; free-running, hold the sensor for its period of wall time."""
         self.publish_reading(sensor)
-        node = self.node
-        if node.has_parameter('real_time_factor') and \
-                node.get_parameter('real_time_factor').value <= 0.0:
+        pacer = getattr(self.node, 'pacer', None)  # free-running: factor 0, steps on request
+        if pacer is not None and pacer.free_running:
             self.resume_at = time.monotonic() + sensor.period
             self.next_look = min(self.watch.next_look, self.resume_at)
             self._switch()
