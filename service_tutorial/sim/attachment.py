@@ -17,9 +17,10 @@ class CompileError(RuntimeError):
     """MuJoCo would not compile the edited spec; the message is its reason on one line."""
 
 
-def attach(spec, mj_model, data, model):
-    """Attach a model to the live spec; return the recompiled MjModel and MjData."""
-    model.attach(spec)
+def attach(spec, mj_model, data, models):
+    """Attach models to the live spec with one recompile; return the new MjModel and MjData."""
+    for model in models:
+        model.attach(spec)
     kept = {field: getattr(data, field).copy() for field in STATE_FIELDS}
     return _recompile(spec, mj_model, data, kept)
 

@@ -122,6 +122,25 @@ def body_state(mj_model, data, body_id):
                       linear_velocity=twist[3:], angular_velocity=twist[:3])
 
 
+def body_accelerations(mj_model, data, body_ids):
+    """
+    Return (linear, angular) acceleration of each body in the world frame, as of the state.
+
+    MuJoCo's accelerations carry gravity as an upward acceleration of the world (what an
+    accelerometer reads); it is taken out, so a body at rest has none.
+    """
+    if not body_ids:
+        return []
+    mujoco.mj_rnePostConstraint(mj_model, data)  # once for every body asked about
+    accelerations = []
+    for body_id in body_ids:
+        acceleration = np.zeros(6)
+        mujoco.mj_objectAcceleration(mj_model, data, mujoco.mjtObj.mjOBJ_BODY, body_id,
+                                     acceleration, 0)
+        accelerations.append((acceleration[3:] + mj_model.opt.gravity, acceleration[:3]))
+    return accelerations
+
+
 def frame_body(reference_frame, models, mj_model):
     """Return the id of the body a reference frame names, given the spawned models by name."""
     if not isinstance(reference_frame, str):

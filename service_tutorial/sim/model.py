@@ -43,6 +43,9 @@ class Model:
         # since put it back at its spawn pose because it became unstable.
         self.placed = 0
         self.recovered = False
+        # What a client said the model is (the standard interfaces' category, description and
+        # tags), or None until one does; it goes with the model.
+        self.entity_info = None
         # Where its elements are in the compiled model, found again by bind().
         self.root_id = 0
         self.free_qpos_adr = self.free_dof_adr = None
@@ -122,8 +125,8 @@ class Model:
         self.root_id = self.element_id(mj_model, mujoco.mjtObj.mjOBJ_BODY, description.root_link)
         self.free_qpos_adr = self.free_dof_adr = None
         qpos, dofs = [], []
-        for joint_id in (joint for joint, body in enumerate(mj_model.jnt_bodyid.tolist())
-                         if body in bodies):
+        # Found in C: a batch spawn binds every new model over a model of all their joints.
+        for joint_id in np.flatnonzero(np.isin(mj_model.jnt_bodyid, list(bodies))).tolist():
             kind = int(mj_model.jnt_type[joint_id])
             qpos_adr = int(mj_model.jnt_qposadr[joint_id])
             dof_adr = int(mj_model.jnt_dofadr[joint_id])

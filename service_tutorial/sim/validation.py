@@ -19,6 +19,10 @@ class WorldError(ValueError):
     """A request the world refuses; str(error) names the cause and the offending value."""
 
 
+class DescriptionError(WorldError):
+    """A robot description the world refuses: it does not parse, or MuJoCo will not build it."""
+
+
 def quoted(text):
     """Return user text in quotes for a message: control characters escaped, long text cut."""
     shown = text[:MAX_QUOTED_LENGTH]

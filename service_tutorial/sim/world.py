@@ -17,16 +17,17 @@ from service_tutorial.sim import attachment
 from service_tutorial.sim import frames
 from service_tutorial.sim import plugins
 from service_tutorial.sim import scene
+from service_tutorial.sim import spawning
 from service_tutorial.sim import validation
 from service_tutorial.sim.core_logs import core_logger
-from service_tutorial.sim.description import UrdfError
 from service_tutorial.sim.description_cache import DescriptionCache
 from service_tutorial.sim.frames import ModelState
 from service_tutorial.sim.model import Model
 from service_tutorial.sim.recovery import Recovery
 from service_tutorial.sim.recovery import take_steps
 from service_tutorial.sim.scenery import Scenery
-from service_tutorial.sim.urdf.hardened_xml import MAX_MODEL_XML_BYTES
+from service_tutorial.sim.spawning import SpawnOrder
+from service_tutorial.sim.validation import DescriptionError
 from service_tutorial.sim.validation import quoted
 from service_tutorial.sim.validation import WorldError
 
@@ -138,54 +139,74 @@ class World:
 
     # ---------------------------------------------------------------- spawn and delete
 
-    def spawn_urdf(self, name, urdf_xml, *, position=(0.0, 0.0, 0.0),
-                   orientation=frames.IDENTITY_QUATERNION, reference_frame='', base_dir=None):
-        """Add a URDF robot, log its notes and return its Model; a refusal changes nothing."""
-        validation.check_model_name(name)
-        if name in self._models:
-            raise WorldError(f'a model named {quoted(name)} already exists')
-        position = validation.position(position)
-        orientation = validation.unit_quaternion(orientation)
-        frame = self._frame_state(reference_frame)
-        world_position, world_orientation = frames.compose(
-            frame.position, frame.orientation, position, orientation)
-        try:
-            description = self._descriptions.load(urdf_xml, base_dir)
-        except UrdfError as error:
-            raise WorldError(str(error)) from None
-        model = Model(name, description, world_position, world_orientation)
+    def spawn_urdf(self, name, urdf_xml, **placement):
+        """
+        Add a URDF robot, log its notes and return its Model; a refusal changes nothing.
+
+        placement: position, orientation, reference_frame and base_dir, as in a SpawnOrder.
+        """
+        outcome, = self.spawn_urdf_batch([SpawnOrder(name, urdf_xml, **placement)])
+        if isinstance(outcome, WorldError):
+            raise outcome
+        return outcome
+
+    def spawn_urdf_batch(self, orders):
+        """
+        Add the robots of several SpawnOrders with one recompile; log their notes.
+
+        Return a Model or the WorldError that refused it, for each order in order. A refused
+        order changes nothing and leaves the others to spawn. Should the batch not compile or
+        not simulate as a whole, its models are attached one at a time to tell which fail.
+        """
+        outcomes, batch = [], {}
+        for order in orders:
+            try:
+                batch[order.name] = spawning.prepared_model(
+                    order, taken=self._models, batch=batch, frame_state=self._frame_state,
+                    descriptions=self._descriptions)
+                outcomes.append(batch[order.name])
+            except WorldError as error:
+                outcomes.append(error)
+        if batch and self._attach(batch) is not None:
+            for name, model in batch.items():
+                refusal = self._attach({name: model})
+                if refusal is not None:
+                    outcomes[outcomes.index(model)] = refusal
+        for model in (model for model in outcomes if isinstance(model, Model)):
+            model.reset_plugins()
+            spawning.log_spawned(_logger, model)
+        self.schedule_events()
+        return outcomes
+
+    def _attach(self, batch):
+        """Attach models with one recompile; return None, or the WorldError that undid it."""
+        first = next(iter(batch.values()))  # named in the refusal, meant for a model alone
+        for model in batch.values():
+            model.frame = None  # a frame of a spec a failed attach threw away is gone
         try:
             self._model, self._data = attachment.attach(self._spec, self._model, self._data,
-                                                        model)
+                                                        batch.values())
         except attachment.CompileError as error:
-            # The live spec still holds the half-attached robot: build it afresh without it.
+            # The live spec still holds the half-attached robots: build it afresh without them.
             self.rebuild(self._models)
-            raise WorldError(f"model '{name}' does not compile: {error}") from None
-        self._models[name] = model
-        model.mark_placed()
-        self._after_recompile([model])  # the others' elements kept their ids; events follow
+            return DescriptionError(f"model '{first.name}' does not compile: {error}")
+        self._models.update(batch)
+        for model in batch.values():
+            model.mark_placed()
+        self._after_recompile(batch.values())  # the others' elements kept their ids
         failure = self.forward()
         if failure is not None:
-            self.rebuild({other: kept for other, kept in self._models.items() if other != name})
-            raise WorldError(f"model '{name}' cannot be simulated at "
-                             f'{model.spawn_position.tolist()}: {failure}; does it overlap '
-                             'other models?')
-        model.reset_plugins()
-        self.schedule_events()
-        _logger.info("spawned model '%s' at %s", name, np.round(model.spawn_position, 4).tolist())
-        for note in description.notes:
-            _logger.warning("model '%s': %s", name, note)
-        return model
+            self.rebuild({name: kept for name, kept in self._models.items()
+                          if name not in batch})
+            return WorldError(f"model '{first.name}' cannot be simulated at "
+                              f'{first.spawn_position.tolist()}: {failure}; does it overlap '
+                              'other models?')
+        return None
 
-    def spawn_urdf_file(self, name, path, **kwargs):
+    def spawn_urdf_file(self, name, path, **placement):
         """Add a robot from a URDF file and return its Model; meshes resolve by its folder."""
-        try:
-            with open(path, 'rb') as urdf_file:
-                urdf_xml = urdf_file.read(MAX_MODEL_XML_BYTES + 1)
-        except OSError as error:
-            raise WorldError(f"cannot read URDF file '{path}': {error.strerror}") from None
-        kwargs.setdefault('base_dir', os.path.dirname(os.path.abspath(path)))
-        return self.spawn_urdf(name, urdf_xml, **kwargs)
+        placement.setdefault('base_dir', os.path.dirname(os.path.abspath(path)))
+        return self.spawn_urdf(name, spawning.read_urdf_file(path), **placement)
 
     def delete_model(self, name):
         """Remove a model; every other model keeps its state."""
@@ -348,6 +369,13 @@ class World:
         model = self._spawned(name)
         frame = self._frame_state(reference_frame)
         return frames.expressed_in(frame, self.body_state(model.root_id))
+
+    def get_model_accelerations(self, names):
+        """Return (linear, angular) acceleration of each model's base link in the world."""
+        roots = [self._spawned(name).root_id for name in names]
+        for root in roots[:1]:
+            self.body_state(root)  # brings the kinematics up to date
+        return frames.body_accelerations(self._model, self._data, roots)
 
     def set_model_state(self, name, *, position, orientation, linear_velocity=(0.0, 0.0, 0.0),
                         angular_velocity=(0.0, 0.0, 0.0), reference_frame=''):

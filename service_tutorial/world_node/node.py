@@ -32,6 +32,7 @@ from rosgraph_msgs.msg import Clock
 from service_tutorial.conversions import fill_time_msg
 from service_tutorial.robot_files import file_model_name, read_robot_file
 from service_tutorial.sim import frames
+from service_tutorial.sim.validation import WorldError
 from service_tutorial.world_node.camera_stream import CAMERA_PARAMETERS, CameraStream
 from service_tutorial.world_node.gazebo_services import GazeboServices
 from service_tutorial.world_node.log_forwarding import forward_core_logs
@@ -112,6 +113,7 @@ class MujocoWorld(Node):
         # Imported here, after the parameters passed their checks: a bad one ends the program
         # before the simulation's imports (yourdfpy and trimesh take over a second).
         from service_tutorial.sim.world import World
+        from service_tutorial.world_node.standard.entities import EntityServices
         scenery = parameters['scenery']
         self.world = World(timestep=parameters['timestep'],
                            cmd_vel_timeout=parameters['cmd_vel_timeout'],
@@ -139,7 +141,8 @@ class MujocoWorld(Node):
         self.gazebo_services = GazeboServices(self)
         # The standard's services, relative to the node's namespace (/reset_simulation...).
         simulation = SimulationServices(self)
-        self.standard_groups = [simulation, SteppingServices(self, simulation)]
+        self.standard_groups = [simulation, SteppingServices(self, simulation),
+                                EntityServices(self)]
         self.feature_service = FeatureService(self, self.standard_groups)
         # ~/camera/image_raw, ~/camera/camera_info (camera_enabled) and ~/save_snapshot.
         self.camera_stream = CameraStream(self, self.world, parameters)
@@ -262,6 +265,35 @@ class MujocoWorld(Node):
         namespace = normalise_namespace(namespace)
         model = self.world.spawn_urdf(name, urdf, position=position, orientation=orientation,
                                       reference_frame=reference_frame, base_dir=base_dir)
+        self._give_interface(model, namespace, urdf)
+        if self.viewer is not None:
+            self._open_viewer()
+        # The world's log has already named each of them, with the reason.
+        return left_out_of(model.description)
+
+    def spawn_models(self, orders, namespaces):
+        """
+        Add the models of several SpawnOrders with one recompile, each with its ROS interface.
+
+        namespaces: each model's normalised namespace. Return, for each order, what the world
+        left out of its model ('' for nothing) or the exception that refused it (a WorldError
+        unless a bug).
+        """
+        outcomes = self.world.spawn_urdf_batch(orders)
+        for index, (order, namespace) in enumerate(zip(orders, namespaces)):
+            if not isinstance(outcomes[index], WorldError):
+                try:
+                    self._give_interface(outcomes[index], namespace, order.urdf_xml)
+                    outcomes[index] = left_out_of(outcomes[index].description)
+                except Exception as error:  # the model is gone again; the others go on
+                    outcomes[index] = error
+        if self.viewer is not None:
+            self._open_viewer()
+        return outcomes
+
+    def _give_interface(self, model, namespace, urdf):
+        """Give a model just spawned its topics; if they cannot be made, delete it again."""
+        name = model.name
         try:
             self.models[name] = ModelInterface(self, self.world, model, namespace)
             if self.models[name].faces:
@@ -270,10 +302,6 @@ class MujocoWorld(Node):
             self._forget_model(name)
             self.world.delete_model(name)
             raise
-        if self.viewer is not None:
-            self._open_viewer()
-        # The world's log has already named each of them, with the reason.
-        return left_out_of(model.description)
 
     def delete_model(self, name):
         """Remove a model from the world along with its ROS interface."""

@@ -1,0 +1,76 @@
+"""
+Spawn orders: a robot to spawn, checked and built into a Model before anything is attached.
+
+A world spawns a batch of orders with one recompile; each order is checked on its own first, so
+that a refused order changes nothing and leaves the others to spawn.
+"""
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from service_tutorial.sim import frames
+from service_tutorial.sim import validation
+from service_tutorial.sim.description import UrdfError
+from service_tutorial.sim.model import Model
+from service_tutorial.sim.urdf.hardened_xml import MAX_MODEL_XML_BYTES
+from service_tutorial.sim.validation import DescriptionError
+from service_tutorial.sim.validation import quoted
+from service_tutorial.sim.validation import WorldError
+
+
+@dataclass(frozen=True)
+class SpawnOrder:
+    """One robot to spawn: its name, its URDF, its pose in a reference frame, its mesh folder."""
+
+    name: str
+    urdf_xml: object  # URDF text, str or bytes
+    position: tuple = (0.0, 0.0, 0.0)
+    orientation: tuple = frames.IDENTITY_QUATERNION  # (w, x, y, z)
+    reference_frame: str = ''  # '' or 'world', a model, 'model::link', or a model of the batch
+    base_dir: str = None  # where mesh paths relative to the URDF resolve
+
+
+def prepared_model(order, *, taken, batch, frame_state, descriptions):
+    """
+    Check an order and build its Model, or raise WorldError; nothing is attached yet.
+
+    taken: the names in the world; batch: the models of the same batch prepared so far, by
+    name (an order may stand relative to one of them); frame_state: the world's ModelState of
+    a reference frame; descriptions: the world's DescriptionCache.
+    """
+    validation.check_model_name(order.name)
+    if order.name in taken or order.name in batch:
+        raise WorldError(f'a model named {quoted(order.name)} already exists')
+    position = validation.position(order.position)
+    orientation = validation.unit_quaternion(order.orientation)
+    earlier = batch.get(order.reference_frame)
+    if earlier is not None:  # not in the world yet: where it is about to stand
+        frame_position, frame_orientation = earlier.spawn_position, earlier.spawn_orientation
+    else:
+        frame = frame_state(order.reference_frame)
+        frame_position, frame_orientation = frame.position, frame.orientation
+    world_position, world_orientation = frames.compose(
+        frame_position, frame_orientation, position, orientation)
+    try:
+        description = descriptions.load(order.urdf_xml, order.base_dir)
+    except UrdfError as error:
+        raise DescriptionError(str(error)) from None
+    return Model(order.name, description, world_position, world_orientation)
+
+
+def log_spawned(logger, model):
+    """Log where a model was spawned and each note on how it was built."""
+    logger.info("spawned model '%s' at %s", model.name,
+                np.round(model.spawn_position, 4).tolist())
+    for note in model.description.notes:
+        logger.warning("model '%s': %s", model.name, note)
+
+
+def read_urdf_file(path):
+    """Return the bytes of a URDF file, at most one more than the size limit, or refuse."""
+    try:
+        with open(path, 'rb') as urdf_file:
+            return urdf_file.read(MAX_MODEL_XML_BYTES + 1)
+    except OSError as error:
+        raise WorldError(f"cannot read URDF file '{path}': {error.strerror}") from None

@@ -1,0 +1,172 @@
+"""
+Where a spawn request's robot comes from: a package:// or file:// uri, or the URDF text itself.
+
+A uri is read only from below an installed ament package's share folder, the same roots a
+robot's meshes may come from: package://<package>/<path> by the package's share, file://<path>
+when the path lies in the share of the package it names (.../share/<package>/...). Paths with
+'..', links that lead out of the share, other schemes and other files are refused unopened. An
+installed .xacro file is expanded with xacro, as a launch file would; a resource_string is
+never expanded (a xacro there is refused by the URDF loader).
+"""
+
+from dataclasses import dataclass
+import os
+
+from service_tutorial.robot_files import expand_xacro, is_xacro, RobotFileError
+from service_tutorial.sim.description import UrdfError
+from service_tutorial.sim.urdf.hardened_xml import MAX_MODEL_XML_BYTES, parse_xml
+from service_tutorial.sim.validation import quoted
+from service_tutorial.world_node.standard.results import Refusal
+from simulation_interfaces.msg import SpawnResult
+
+ROBOT_EXTENSIONS = ('.urdf', '.xacro')
+# Formats other simulators spawn, named in the refusal: this world spawns URDF.
+OTHER_FORMATS = {'.sdf': 'SDF', '.world': 'SDF', '.xml': 'MJCF', '.mjcf': 'MJCF',
+                 '.usd': 'USD', '.usda': 'USD', '.usdc': 'USD', '.usdz': 'USD'}
+OTHER_ROOTS = {'sdf': 'SDF', 'mujoco': 'MJCF'}
+MAX_URI_LENGTH = 4096
+XACRO_TAG = '{http://www.ros.org/wiki/xacro}'
+
+
+@dataclass(frozen=True)
+class RobotText:
+    """A robot to spawn: its URDF text, the folder its meshes resolve from, its own name."""
+
+    urdf: str
+    base_dir: str  # None for a resource_string
+    robot_name: str  # the name of its <robot>, '' if it has none
+
+
+def read_resource(uri, resource_string, package_share):
+    """
+    Return the RobotText of a spawn request's resource (the uri wins), or raise a Refusal.
+
+    package_share maps a package name to its share folder (ament's get_package_share_directory).
+    """
+    if uri:
+        path = resource_path(uri, package_share)
+        return robot_text(_read_file(uri, path), os.path.dirname(path), quoted(uri))
+    if not resource_string:
+        raise Refusal(SpawnResult.NO_RESOURCE, 'neither uri nor resource_string is given')
+    return robot_text(resource_string, None, 'resource_string')
+
+
+def resource_path(uri, package_share):
+    """Return the real path of the robot file a uri names, or refuse it with NO_RESOURCE."""
+    shown = quoted(uri)
+    if len(uri) > MAX_URI_LENGTH:
+        raise Refusal(SpawnResult.NO_RESOURCE, f'uri {shown} is longer than {MAX_URI_LENGTH} '
+                      'characters')
+    scheme, separator, rest = uri.partition('://')
+    if not separator or scheme not in ('package', 'file'):
+        raise Refusal(SpawnResult.NO_RESOURCE, f'uri {shown} is neither package://<package>/'
+                      '<path> nor file://<absolute path>')
+    if '..' in rest.split('/') or '\0' in rest:
+        raise Refusal(SpawnResult.NO_RESOURCE, f"uri {shown} must not contain '..'")
+    if scheme == 'package':
+        package, _, relative = rest.partition('/')
+        share = _share(package, package_share, shown)
+        candidate = os.path.join(share, relative)
+    else:
+        if not rest.startswith('/'):
+            raise Refusal(SpawnResult.NO_RESOURCE, f'uri {shown} is not an absolute path')
+        candidate = os.path.normpath(rest)
+        share = _share_holding(candidate, package_share)
+        if share is None:
+            raise Refusal(SpawnResult.NO_RESOURCE, f'uri {shown} lies outside the share '
+                          'folders of the installed packages')
+    path = os.path.realpath(candidate)
+    if not path.startswith(share.rstrip(os.sep) + os.sep):
+        raise Refusal(SpawnResult.NO_RESOURCE, f'uri {shown} leads outside the share folder '
+                      'of its package')
+    if not os.path.isfile(path):
+        raise Refusal(SpawnResult.NO_RESOURCE, f'uri {shown} names no file')
+    extension = os.path.splitext(path)[1].lower()
+    if extension in OTHER_FORMATS:
+        raise Refusal(SpawnResult.UNSUPPORTED_FORMAT, f'uri {shown} is '
+                      f'{OTHER_FORMATS[extension]}; this world spawns urdf')
+    if extension not in ROBOT_EXTENSIONS:
+        raise Refusal(SpawnResult.UNSUPPORTED_FORMAT, f'uri {shown} is not a .urdf or '
+                      '.xacro file; this world spawns urdf')
+    return path
+
+
+def _share(package, package_share, shown):
+    """Return the real share folder of a package, or refuse the uri that names it."""
+    if not package or not all(character.isalnum() or character == '_'
+                              for character in package):
+        raise Refusal(SpawnResult.NO_RESOURCE, f'uri {shown} names no valid package')
+    try:
+        share = package_share(package)
+    except Exception:  # ament's PackageNotFoundError, or a resolver's own error
+        share = None
+    if not share or not os.path.isdir(share):
+        raise Refusal(SpawnResult.NO_RESOURCE, f'uri {shown}: package {quoted(package)} is '
+                      'not installed')
+    return os.path.realpath(share)
+
+
+def _share_holding(path, package_share):
+    """Return the real share folder of the package whose files hold path, or None."""
+    parts = path.split(os.sep)
+    for index in range(len(parts) - 1):
+        if parts[index] == 'share':
+            try:
+                share = package_share(parts[index + 1])
+            except Exception:
+                continue
+            if share and os.path.realpath(share) == os.path.realpath(
+                    os.sep.join(parts[:index + 2])):
+                return os.path.realpath(share)
+    return None
+
+
+def _read_file(uri, path):
+    """Return the URDF text of an allowed file, expanding a xacro file."""
+    try:
+        with open(path, 'rb') as robot_file:
+            data = robot_file.read(MAX_MODEL_XML_BYTES + 1)
+    except OSError as error:
+        raise Refusal(SpawnResult.NO_RESOURCE,
+                      f'uri {quoted(uri)} cannot be read: {error.strerror}') from None
+    if len(data) > MAX_MODEL_XML_BYTES:
+        raise Refusal(SpawnResult.RESOURCE_PARSE_ERROR, f'uri {quoted(uri)} is larger than '
+                      f'the limit of {MAX_MODEL_XML_BYTES} bytes')
+    try:
+        text = data.decode('utf-8')
+    except UnicodeDecodeError:
+        raise Refusal(SpawnResult.RESOURCE_PARSE_ERROR,
+                      f'uri {quoted(uri)} is not UTF-8 text') from None
+    if is_xacro(path, text):
+        try:
+            return expand_xacro(path)
+        except RobotFileError as error:
+            raise Refusal(SpawnResult.RESOURCE_PARSE_ERROR, str(error)) from None
+    return text
+
+
+def robot_text(text, base_dir, what):
+    """Check that text is URDF (no other format) and return its RobotText, or refuse it."""
+    data = text.encode('utf-8') if isinstance(text, str) else bytes(text)
+    if len(data) > MAX_MODEL_XML_BYTES:
+        raise Refusal(SpawnResult.RESOURCE_PARSE_ERROR, f'{what} is {len(data)} bytes, more '
+                      f'than the limit of {MAX_MODEL_XML_BYTES}')
+    if not data.strip():
+        raise Refusal(SpawnResult.RESOURCE_PARSE_ERROR, f'{what} is empty')
+    try:
+        root = parse_xml(data, what)
+    except UrdfError as error:
+        raise Refusal(SpawnResult.RESOURCE_PARSE_ERROR, str(error)) from None
+    tag = root.tag if isinstance(root.tag, str) else ''
+    if tag in OTHER_ROOTS:
+        raise Refusal(SpawnResult.UNSUPPORTED_FORMAT, f'{what} is {OTHER_ROOTS[tag]} '
+                      f'(root element <{tag}>); this world spawns urdf')
+    if tag != 'robot':
+        raise Refusal(SpawnResult.RESOURCE_PARSE_ERROR,
+                      f'{what} is not URDF: root element is <{tag[:40]}>')
+    if any(isinstance(element.tag, str) and element.tag.startswith(XACRO_TAG)
+           for element in root.iter()):
+        raise Refusal(SpawnResult.RESOURCE_PARSE_ERROR, f'{what} contains xacro macros, '
+                      'which a spawn never expands; an installed .xacro file may be spawned '
+                      'by its uri')
+    return RobotText(urdf=text, base_dir=base_dir, robot_name=root.get('name') or '')
