@@ -141,8 +141,8 @@ class MujocoWorld(Node):
         self.gazebo_services = GazeboServices(self)
         # The standard's services, relative to the node's namespace (/reset_simulation...).
         simulation = SimulationServices(self)
-        self.standard_groups = [simulation, SteppingServices(self, simulation),
-                                EntityServices(self)]
+        self.stepping_services = SteppingServices(self, simulation)
+        self.standard_groups = [simulation, self.stepping_services, EntityServices(self)]
         self.feature_service = FeatureService(self, self.standard_groups)
         # ~/camera/image_raw, ~/camera/camera_info (camera_enabled) and ~/save_snapshot.
         self.camera_stream = CameraStream(self, self.world, parameters)
@@ -353,12 +353,14 @@ class MujocoWorld(Node):
             self.viewer.sync()
 
     def destroy_node(self):
-        """Close the viewer along with the node, and stop passing the core's logs on."""
+        """Close the viewer and the action server along with the node; stop passing logs on."""
         if self.viewer is not None:
             self.viewer.close()
             self.viewer = None
         self.camera_stream.close()
         self.forwarded_logs.stop()
+        # An action server keeps the node's handle alive (and its /rosout) until destroyed.
+        self.stepping_services.destroy()
         return super().destroy_node()
 
 

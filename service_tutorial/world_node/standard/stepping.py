@@ -60,6 +60,12 @@ class SteppingServices:
             node, SimulateSteps, 'simulate_steps', self.simulate_steps_callback,
             cancel_callback=self.cancel_callback, callback_group=self.stepping_group)
 
+    def destroy(self):
+        """Destroy the action server along with the node (the service goes with the node)."""
+        if self.simulate_steps_server is not None:
+            self.simulate_steps_server.destroy()
+            self.simulate_steps_server = None
+
     def start(self, count, limit, **options):
         """Start count steps (StepRequest's options); return the request or raise a Refusal."""
         if count < 1:
