@@ -19,8 +19,11 @@ class CompileError(RuntimeError):
 
 def attach(spec, mj_model, data, models):
     """Attach models to the live spec with one recompile; return the new MjModel and MjData."""
-    for model in models:
-        model.attach(spec)
+    try:
+        for model in models:
+            model.attach(spec)
+    except Exception as error:  # the world builds its spec afresh, as for a failed compile
+        raise CompileError(compile_error(error)) from None
     kept = {field: getattr(data, field).copy() for field in STATE_FIELDS}
     return _recompile(spec, mj_model, data, kept)
 
