@@ -7,7 +7,6 @@ Its figure and the one it is compared with are taken in turns, round by round, s
 the same load on a shared machine; the rows give medians of the rounds.
 """
 
-import gc
 import time
 
 from fleet import core_fleet, DRIVE_ANGULAR_Z, Fleet, fleet_names, fleet_parameters
@@ -252,10 +251,6 @@ def standard_table(observer, config):
         finally:
             world.close()
         stepping = step_rounds(observer, config)
-        # The worlds leave reference cycles (models, plugins, faces, rclpy entities). Left to a
-        # later collection, they were freed in a forked child (flake8's workers in
-        # test_benchmark.py) and crashed it: free them here, in this process.
-        gc.collect()
     table = Table('standard_interfaces', 'The standard simulation interfaces against their '
                   'limits (ms)', [
                       ('figure', ''), ('rounds', 'd'), ('service p50', '.2f'),
