@@ -87,8 +87,8 @@ class StandardWorld:
         self._trivial.node.destroy_node()
 
 
-def spawn_fields(index, urdf):
-    """Return the fields of a request that spawns the index-th tinybot of a fleet from text."""
+def spawn_fields(index):
+    """Return the name, namespace and pose of the index-th tinybot of a fleet, to spawn it."""
     from geometry_msgs.msg import PoseStamped
     name = fleet_names(index + 1)[index]
     pose = PoseStamped()
@@ -100,7 +100,7 @@ def spawn_fields(index, urdf):
 def single_spawn(index, urdf):
     """Return the SpawnEntity service request of the index-th tinybot of a fleet."""
     from simulation_interfaces.srv import SpawnEntity
-    return SpawnEntity.Request(resource_string=urdf, **spawn_fields(index, urdf))
+    return SpawnEntity.Request(resource_string=urdf, **spawn_fields(index))
 
 
 def batch_spawn(count, urdf):
@@ -108,7 +108,7 @@ def batch_spawn(count, urdf):
     from simulation_interfaces.msg import Resource, SpawnEntity
     from simulation_interfaces.srv import SpawnEntities
     return SpawnEntities.Request(spawn_requests=[
-        SpawnEntity(entity_resource=Resource(resource_string=urdf), **spawn_fields(index, urdf))
+        SpawnEntity(entity_resource=Resource(resource_string=urdf), **spawn_fields(index))
         for index in range(count)])
 
 
@@ -280,8 +280,8 @@ def standard_table(observer, config):
                            core + TRIGGERS_ALLOWED * trigger))
     table.note = (
         'reference: what the service is compared with, taken in turns with it, round by round. '
-        f"SpawnEntities: MuJoCo's own path on a bare MjSpec (spawn_cost.py's BareWorld: "
-        f'from_string of the same URDF text, a free joint and attach_body for each, one '
+        "SpawnEntities: MuJoCo's own path on a bare MjSpec (spawn_cost.py's BareWorld: "
+        'from_string of the same URDF text, a free joint and attach_body for each, one '
         f'recompile); limit {BATCH_LIMIT} x reference + {TRIGGERS_ALLOWED:g} x Trigger. Against '
         f'{count} SpawnEntity calls: the batch must take at most 1/{SINGLES_FACTOR:g} of their '
         'total. StepSimulation: from request to answer, the world paused and its robots driving '
