@@ -15,7 +15,9 @@ as JSON (output/benchmark.json unless --json says otherwise). What runs where:
 - the sensors' cost: a scan and a robot camera frame in a World in this process against bare
   MuJoCo calls, and mujoco_world as a process with and without a subscriber to a laser;
 - answers that need no simulation: model_services without a world, and robot_turning_server
-  in this process.
+  in this process;
+- the standard simulation interfaces (SpawnEntities, StepSimulation, GetEntitiesStates): the
+  world node in this process, paused, against MuJoCo's own batch, bare mj_step and the World.
 
 Run it with scripts/benchmark [--quick] [--json PATH].
 """
@@ -38,6 +40,7 @@ from service_tutorial.testing.isolation import isolate_ros_graph
 from spawn_cost import spawn_cost_table
 from spawn_growth import growth_table
 from speed import speed_tables
+from standard_interfaces import standard_table
 from startup import startup_table
 from turning import turning_tables
 
@@ -73,6 +76,11 @@ class Config:
     camera_window: float = 2.0             # wall s of streaming camera measured
     scan_repeats: int = 300                # scans per timing of the laser rows
     camera_frames: int = 20                # frames per timing of the robot camera row
+    standard_batch: int = 50               # tinybots of a SpawnEntities batch and its states
+    standard_rounds: int = 5               # alternating rounds of the batch and stepping rows
+    standard_steps: int = 10_000           # steps of one StepSimulation call
+    standard_step_robots: int = 10         # driving tinybots stepped
+    standard_calls: int = 100              # GetEntitiesStates round trips
     log_path: str = os.path.join(tempfile.gettempdir(), 'world_benchmark-nodes.log')
 
 
@@ -81,11 +89,13 @@ QUICK = Config(calls=5, growth_counts=(1, 2), growth_calls=3, robot_counts=(1,),
                warm_up=0.2, startup_runs=1,
                durations=(1,), velocities=(0.5,), turning_rtf=4.0, turning_check_rtfs=(),
                core_spawns=3, cost_counts=(1, 2), cost_calls=3, box_count=5, step_rounds=2,
-               step_count=200, camera_window=0.3, scan_repeats=20, camera_frames=2)
+               step_count=200, camera_window=0.3, scan_repeats=20, camera_frames=2,
+               standard_batch=3, standard_rounds=1, standard_steps=200,
+               standard_step_robots=2, standard_calls=3)
 
 
 SECTIONS = ('round_trips', 'spawn_growth', 'speed', 'startup', 'turning', 'core', 'spawn_cost',
-            'camera', 'sensors', 'answers')
+            'camera', 'sensors', 'answers', 'standard')
 
 
 def run(config, *, sections=SECTIONS, report=print):
@@ -111,6 +121,7 @@ def run(config, *, sections=SECTIONS, report=print):
         'camera': lambda: [camera_table(observer, config)],
         'sensors': lambda: [sensor_table(observer, config)],
         'answers': lambda: [answers_table(observer, config)],
+        'standard': lambda: [standard_table(observer, config)],
     }
     try:
         for section, measure in measurements.items():

@@ -73,6 +73,8 @@ class RequestedSteps:
         if self.current is not None:
             return None
         self.current = StepRequest(count, **options)
+        # Free-running until the request ends: a stream's turn in wall time outlasts a tick.
+        self.node.pacer.step_on_request(True)
         # Ticks come on every executor turn while steps are due (see MujocoWorld.step_callback).
         self.node.step_timer.timer_period_ns = 0
         self.node.step_timer.reset()
@@ -85,18 +87,15 @@ class RequestedSteps:
             self.stop('cancelled')
             return
         world, pacer = node.world, node.pacer
-        pacer.step_on_request(True)
-        try:
-            for steps in pacer.requested_chunks(request.remaining, lambda: world.time,
-                                                lambda: node.camera_stream.next_due):
-                world.step(steps, even_if_paused=True)
-                request.taken += steps
-                node.publish_due()
-        finally:
-            pacer.step_on_request(False)
+        for steps in pacer.requested_chunks(request.remaining, lambda: world.time,
+                                            lambda: node.camera_stream.next_due):
+            world.step(steps, even_if_paused=True)
+            request.taken += steps
+            node.publish_due()
         if request.remaining > 0:
             request.report_progress()
             return
+        pacer.step_on_request(False)
         # Where the steps ended, whatever the streams' rates: the time, odometry, joint states.
         node.publish_clock()
         pacer.restart(world.time, STATE_STREAMS)
@@ -107,5 +106,6 @@ class RequestedSteps:
     def stop(self, reason):
         """End the request in progress early, saying why (a sentence's start: 'cancelled')."""
         request, self.current = self.current, None
+        self.node.pacer.step_on_request(False)
         if request is not None:
             request.end(f'{reason} after {request.taken} of {request.count} steps')

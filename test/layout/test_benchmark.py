@@ -27,13 +27,15 @@ EXPECTED_ROWS = {
     'turning': len(QUICK.durations) * len(QUICK.velocities),
     'targets': (1 + 2 * len(QUICK.growth_counts) + 6 * len(QUICK.cost_counts) + 1
                 + 2 * len(QUICK.robot_counts)
-                + (report.CPU_TARGET_ROBOTS in QUICK.robot_counts) + 1 + 1),
+                + (report.CPU_TARGET_ROBOTS in QUICK.robot_counts) + 1 + 1 + 4),
     'core': 2,
     # cold spawn, warm spawn and delete of two robots per world size, and the box sequence
     'spawn_cost': 6 * len(QUICK.cost_counts) + 1,
     'camera': 1,
     'sensors': 5,
     'answers': 3,
+    # SpawnEntities against MuJoCo's batch and against single spawns, StepSimulation, states
+    'standard_interfaces': 4,
 }
 
 
@@ -78,11 +80,14 @@ def test_quick_benchmark_fills_every_table(rclpy_session, tmp_path):
 def test_command_line_options():
     config, sections, path = world_benchmark.parse_args(
         ['--quick', '--robots', '1,3', '--calls', '7', '--json', 'x.json',
-         '--sections', 'speed,startup'])
+         '--sections', 'speed,startup,standard'])
     assert config.robot_counts == (1, 3) and config.calls == 7
-    assert sections == ('speed', 'startup') and path == 'x.json'
+    assert sections == ('speed', 'startup', 'standard') and path == 'x.json'
     full, all_sections, default_path = world_benchmark.parse_args([])
     assert full.calls >= 200 and full.robot_counts == (1, 10, 50)
+    # The issue's figures for the standard interfaces' rows.
+    assert (full.standard_batch, full.standard_steps, full.standard_step_robots) == \
+        (50, 10_000, 10)
     assert all_sections == world_benchmark.SECTIONS
     assert default_path.endswith(os.path.join('output', 'benchmark.json'))
     with pytest.raises(SystemExit):

@@ -1,0 +1,294 @@
+"""
+The standard simulation interfaces against MuJoCo's own limits: a batch spawn, stepping, states.
+
+The world node runs in this process, paused, on an executor thread of its own shared with a
+trivial std_srvs/Trigger service, and is called from the observer (the layout of round_trips.py).
+Its figure and the one it is compared with are taken in turns, round by round, so that both see
+the same load on a shared machine; the rows give medians of the rounds.
+"""
+
+import time
+
+from fleet import core_fleet, DRIVE_ANGULAR_Z, Fleet, fleet_names, fleet_parameters
+from fleet import fleet_position, RawFleet, read_model
+from harness import BenchmarkError, ExecutorThread, quiet_console, wait_until
+import mujoco
+from report import median_ms, Table
+from round_trips import TrivialService
+from spawn_cost import BareWorld
+
+# SpawnEntities of a batch: at most this many times MuJoCo's own path for the same batch, plus
+# two Trigger round trips; and at least SINGLES_FACTOR times faster than as many SpawnEntity.
+BATCH_LIMIT = 1.5
+SINGLES_FACTOR = 10.0
+# StepSimulation: at most this many times bare mj_step of the same steps, plus two Trigger.
+STEP_LIMIT = 1.2
+# Each of the three limits allows the service this many Trigger round trips more.
+TRIGGERS_ALLOWED = 2.0
+# Steps the driving fleet takes before the stepping rounds, and to check it drives.
+STEP_WARM_UP = 500
+
+
+class StandardWorld:
+    """The world node in this process, paused, beside a trivial Trigger service."""
+
+    def __init__(self, observer, parameters):
+        from rclpy.parameter import Parameter
+        from service_tutorial.world_node.node import MujocoWorld
+        from std_srvs.srv import Trigger
+        self._observer = observer
+        # An empty list's type cannot be told from its value: the only one here is 'models'.
+        overrides = [Parameter(name, Parameter.Type.STRING_ARRAY, value) if value == []
+                     else Parameter(name, value=value)
+                     for name, value in {**parameters, 'paused': True}.items()]
+        self.node = MujocoWorld(parameter_overrides=overrides)
+        self._trivial = TrivialService()
+        self._executor_thread = ExecutorThread(self.node, self._trivial.node)
+        try:
+            observer.wait_for_service(Trigger, '/benchmark_trivial/trigger')
+        except BaseException:
+            self.close()
+            raise
+
+    def call(self, srv_type, name, request, *, timeout=120.0):
+        """Call one of the standard's services; raise BenchmarkError unless it succeeds."""
+        from simulation_interfaces.msg import Result
+        self._observer.wait_for_service(srv_type, name)
+        response = self._observer.call(srv_type, name, request, timeout=timeout)
+        if response.result.result != Result.RESULT_OK:
+            raise BenchmarkError(f'{name} answered {response.result.result}: '
+                                 f'{response.result.error_message}')
+        return response
+
+    def timed(self, srv_type, name, request):
+        """Return the wall time of one successful call, from request to answer, in s."""
+        self._observer.wait_for_service(srv_type, name)
+        start = time.perf_counter()
+        self.call(srv_type, name, request)
+        return time.perf_counter() - start
+
+    def trigger(self):
+        """Return the wall time of one trivial Trigger round trip, in s."""
+        from std_srvs.srv import Trigger
+        start = time.perf_counter()
+        self._observer.call(Trigger, '/benchmark_trivial/trigger', Trigger.Request())
+        return time.perf_counter() - start
+
+    def remove_spawned(self):
+        """Remove every entity spawned since start-up (ResetSimulation, scope SPAWNED)."""
+        from simulation_interfaces.srv import ResetSimulation
+        self.call(ResetSimulation, '/reset_simulation',
+                  ResetSimulation.Request(scope=ResetSimulation.Request.SCOPE_SPAWNED))
+
+    def close(self):
+        """Stop the executor thread and destroy both nodes."""
+        self._executor_thread.stop()
+        self.node.destroy_node()
+        self._trivial.node.destroy_node()
+
+
+def spawn_fields(index):
+    """Return the name, namespace and pose of the index-th tinybot of a fleet, to spawn it."""
+    from geometry_msgs.msg import PoseStamped
+    name = fleet_names(index + 1)[index]
+    pose = PoseStamped()
+    pose.header.frame_id = 'world'
+    pose.pose.position.x, pose.pose.position.y, pose.pose.position.z = fleet_position(index)
+    return {'name': name, 'entity_namespace': name, 'initial_pose': pose}
+
+
+def single_spawn(index, urdf):
+    """Return the SpawnEntity service request of the index-th tinybot of a fleet."""
+    from simulation_interfaces.srv import SpawnEntity
+    return SpawnEntity.Request(resource_string=urdf, **spawn_fields(index))
+
+
+def batch_spawn(count, urdf):
+    """Return the SpawnEntities request of a fleet of count tinybots."""
+    from simulation_interfaces.msg import Resource, SpawnEntity
+    from simulation_interfaces.srv import SpawnEntities
+    return SpawnEntities.Request(spawn_requests=[
+        SpawnEntity(entity_resource=Resource(resource_string=urdf), **spawn_fields(index))
+        for index in range(count)])
+
+
+def bare_batch(urdf, count):
+    """Return the wall time MuJoCo's own path takes for count tinybots and one recompile."""
+    bare = BareWorld('', [])
+    start = time.perf_counter()
+    for index, name in enumerate(fleet_names(count)):
+        bare.attach(urdf, name, fleet_position(index))
+    bare.model, bare.data = bare.spec.recompile(bare.model, bare.data)
+    return time.perf_counter() - start
+
+
+def spawn_rounds(world, config):
+    """
+    Time a batch spawn, MuJoCo's own batch, the same spawns one by one, and Trigger; in rounds.
+
+    Each round: MuJoCo's batch on a bare spec, SpawnEntities of the batch, a Trigger, the batch
+    removed; then the same tinybots by SpawnEntity one at a time (their total), removed again.
+    """
+    from simulation_interfaces.srv import SpawnEntities, SpawnEntity
+    urdf = read_model('tinybot')
+    batch = batch_spawn(config.standard_batch, urdf)
+    singles = [single_spawn(index, urdf) for index in range(config.standard_batch)]
+    samples = {'batch': [], 'bare batch': [], 'singles': [], 'trigger': []}
+    for index in range(config.standard_rounds + 1):  # the first warms up
+        round_samples = {'bare batch': bare_batch(urdf, config.standard_batch),
+                         'batch': world.timed(SpawnEntities, '/spawn_entities', batch),
+                         'trigger': world.trigger()}
+        world.remove_spawned()
+        start = time.perf_counter()
+        for request in singles:
+            world.call(SpawnEntity, '/spawn_entity', request)
+        round_samples['singles'] = time.perf_counter() - start
+        world.remove_spawned()
+        if index > 0:
+            for key, value in round_samples.items():
+                samples[key].append(value)
+    return samples
+
+
+def core_states(world, names):
+    """Compute what GetEntitiesStates reports of names on a ROS-free World: poses, twists..."""
+    accelerations = world.get_model_accelerations(names)
+    return [(world.get_model_state(name), acceleration)
+            for name, acceleration in zip(names, accelerations)]
+
+
+def states_rounds(world, config):
+    """Time GetEntitiesStates of a spawned fleet, the same states on a World, and Trigger."""
+    from simulation_interfaces.srv import GetEntitiesStates, SpawnEntities
+    count = config.standard_batch
+    urdf = read_model('tinybot')
+    world.call(SpawnEntities, '/spawn_entities', batch_spawn(count, urdf))
+    core, names = core_fleet(count, driving=False), fleet_names(count)
+    response = world.call(GetEntitiesStates, '/get_entities_states', GetEntitiesStates.Request())
+    if list(response.entities) != names:
+        raise BenchmarkError(f'get_entities_states listed {list(response.entities)}, not the '
+                             f'{count} tinybots spawned')
+    samples = {'states': [], 'core states': [], 'trigger': []}
+    for index in range(config.standard_calls + 3):  # the first three warm up
+        start = time.perf_counter()
+        core_states(core, names)
+        round_samples = {'core states': time.perf_counter() - start,
+                         'states': world.timed(GetEntitiesStates, '/get_entities_states',
+                                               GetEntitiesStates.Request()),
+                         'trigger': world.trigger()}
+        if index >= 3:
+            for key, value in round_samples.items():
+                samples[key].append(value)
+    return samples
+
+
+def angular_speed(world, name):
+    """Return an entity's turning rate about z, in rad/s, through GetEntityState."""
+    from simulation_interfaces.srv import GetEntityState
+    response = world.call(GetEntityState, '/get_entity_state',
+                          GetEntityState.Request(entity=name))
+    return response.state.twist.angular.z
+
+
+def start_driving(world, fleet, *, tries=10):
+    """Command a paused world's fleet and step it until bot0 turns; fail if it never does."""
+    from simulation_interfaces.srv import StepSimulation
+    wait_until(lambda: all(p.get_subscription_count() > 0 for p in fleet.publishers),
+               'the world did not subscribe to every cmd_vel')
+    for _ in range(tries):
+        # A command is taken at the world's next tick: one sent just before may be late.
+        fleet.publish()
+        world.call(StepSimulation, '/step_simulation', StepSimulation.Request(steps=STEP_WARM_UP))
+        if angular_speed(world, fleet.names[0]) >= 0.8 * DRIVE_ANGULAR_Z:
+            return
+    raise BenchmarkError(f'{fleet.names[0]} does not turn on cmd_vel while stepped')
+
+
+def step_rounds(observer, config):
+    """
+    Time StepSimulation of a driving fleet against bare mj_step of the same fleet, in rounds.
+
+    Both fleets drive in circles: the node's on cmd_vel, the bare one as RawFleet sets it up.
+    """
+    from simulation_interfaces.srv import StepSimulation
+    count, steps = config.standard_step_robots, config.standard_steps
+    raw = RawFleet(count)
+    world = StandardWorld(observer, fleet_parameters(count, 1.0))
+    fleet = Fleet(observer, count)
+    try:
+        start_driving(world, fleet)
+        request = StepSimulation.Request(steps=steps)
+        samples = {'stepping': [], 'bare steps': [], 'trigger': []}
+        for index in range(config.standard_rounds + 1):  # the first warms up
+            start = time.perf_counter()
+            mujoco.mj_step(raw.world.model, raw.world.data, steps)
+            round_samples = {'bare steps': time.perf_counter() - start,
+                             'stepping': world.timed(StepSimulation, '/step_simulation', request),
+                             'trigger': world.trigger()}
+            if index > 0:
+                for key, value in round_samples.items():
+                    samples[key].append(value)
+        if angular_speed(world, fleet.names[0]) < 0.8 * DRIVE_ANGULAR_Z:
+            raise BenchmarkError(f'{fleet.names[0]} stopped turning during the measurement')
+        return samples
+    finally:
+        fleet.destroy()
+        world.close()
+
+
+def _row(figure, rounds, measured, reference, trigger, limit):
+    return [figure, rounds, measured, reference, trigger, limit, measured <= limit]
+
+
+def standard_table(observer, config):
+    """SpawnEntities, StepSimulation and GetEntitiesStates against their limits."""
+    count = config.standard_batch
+    with quiet_console(config.log_path):
+        world = StandardWorld(observer, {'models': [], 'scenery': ''})
+        try:
+            spawning = spawn_rounds(world, config)
+            states = states_rounds(world, config)
+        finally:
+            world.close()
+        stepping = step_rounds(observer, config)
+    table = Table('standard_interfaces', 'The standard simulation interfaces against their '
+                  'limits (ms)', [
+                      ('figure', ''), ('rounds', 'd'), ('service p50', '.2f'),
+                      ('reference p50', '.2f'), ('Trigger p50', '.3f'), ('limit', '.2f'),
+                      ('within', '')])
+    batch, bare = median_ms(spawning['batch']), median_ms(spawning['bare batch'])
+    singles, trigger = median_ms(spawning['singles']), median_ms(spawning['trigger'])
+    rounds = len(spawning['batch'])
+    table.rows.append(_row(f'SpawnEntities of {count} tinybots <= {BATCH_LIMIT:g} x MuJoCo batch '
+                           f'+ {TRIGGERS_ALLOWED:g} x Trigger', rounds, batch, bare,
+                           trigger, BATCH_LIMIT * bare + TRIGGERS_ALLOWED * trigger))
+    table.rows.append(_row(f'SpawnEntities of {count} tinybots <= 1/{SINGLES_FACTOR:g} of {count} '
+                           'SpawnEntity calls',
+                           rounds, batch, singles, trigger, singles / SINGLES_FACTOR))
+    trigger = median_ms(stepping['trigger'])
+    bare = median_ms(stepping['bare steps'])
+    table.rows.append(_row(f'StepSimulation of {config.standard_steps} steps, '
+                           f'{config.standard_step_robots} tinybots <= {STEP_LIMIT:g} x bare '
+                           f'mj_step + {TRIGGERS_ALLOWED:g} x Trigger',
+                           len(stepping['stepping']), median_ms(stepping['stepping']), bare,
+                           trigger, STEP_LIMIT * bare + TRIGGERS_ALLOWED * trigger))
+    trigger = median_ms(states['trigger'])
+    core = median_ms(states['core states'])
+    table.rows.append(_row(f'GetEntitiesStates of {count} entities <= core + '
+                           f'{TRIGGERS_ALLOWED:g} x Trigger', len(states['states']),
+                           median_ms(states['states']), core, trigger,
+                           core + TRIGGERS_ALLOWED * trigger))
+    table.note = (
+        'reference: what the service is compared with, taken in turns with it, round by round. '
+        "SpawnEntities: MuJoCo's own path on a bare MjSpec (spawn_cost.py's BareWorld: "
+        'from_string of the same URDF text, a free joint and attach_body for each, one '
+        f'recompile); limit {BATCH_LIMIT} x reference + {TRIGGERS_ALLOWED:g} x Trigger. Against '
+        f'{count} SpawnEntity calls: the batch must take at most 1/{SINGLES_FACTOR:g} of their '
+        'total. StepSimulation: from request to answer, the world paused and its robots driving '
+        'on cmd_vel; reference: one bare mj_step call of as many steps on the same fleet, '
+        f'compiled in this process and driving too; limit {STEP_LIMIT} x reference + '
+        f'{TRIGGERS_ALLOWED:g} x Trigger. GetEntitiesStates: every entity, no filter; '
+        "reference: the core's cost, the same accelerations, poses and twists read from a "
+        f'ROS-free World holding the same fleet; limit reference + {TRIGGERS_ALLOWED:g} x '
+        "Trigger. Trigger: the trivial service on the world's executor.")
+    return table
