@@ -98,7 +98,7 @@ def resolve_mesh_path(filename, base_dir, package_resolver):
             raise UrdfError(f"mesh '{filename}' is a file:// URI without an absolute path")
         if base_dir is not None:
             allowed_roots.append(base_dir)
-        share = _share_holding(candidate, package_resolver)
+        share = share_holding(candidate, package_resolver)
         if share is not None:
             allowed_roots.append(share)
     elif '://' in filename:
@@ -209,7 +209,7 @@ def _package_share(package, package_resolver):
     return os.path.realpath(share)
 
 
-def _share_holding(path, package_resolver):
+def share_holding(path, package_resolver):
     """Return the share directory of the package whose files hold path, if there is one."""
     if package_resolver is None:
         return None

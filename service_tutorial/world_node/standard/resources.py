@@ -15,6 +15,7 @@ import os
 from service_tutorial.robot_files import expand_xacro, is_xacro, RobotFileError
 from service_tutorial.sim.description import UrdfError
 from service_tutorial.sim.urdf.hardened_xml import MAX_MODEL_XML_BYTES, parse_xml
+from service_tutorial.sim.urdf.meshes import share_holding
 from service_tutorial.sim.validation import quoted
 from service_tutorial.world_node.standard.results import Refusal
 from simulation_interfaces.msg import SpawnResult
@@ -71,7 +72,7 @@ def resource_path(uri, package_share):
         if not rest.startswith('/'):
             raise Refusal(SpawnResult.NO_RESOURCE, f'uri {shown} is not an absolute path')
         candidate = os.path.normpath(rest)
-        share = _share_holding(candidate, package_share)
+        share = share_holding(candidate, package_share)
         if share is None:
             raise Refusal(SpawnResult.NO_RESOURCE, f'uri {shown} lies outside the share '
                           'folders of the installed packages')
@@ -104,21 +105,6 @@ def _share(package, package_share, shown):
         raise Refusal(SpawnResult.NO_RESOURCE, f'uri {shown}: package {quoted(package)} is '
                       'not installed')
     return os.path.realpath(share)
-
-
-def _share_holding(path, package_share):
-    """Return the real share folder of the package whose files hold path, or None."""
-    parts = path.split(os.sep)
-    for index in range(len(parts) - 1):
-        if parts[index] == 'share':
-            try:
-                share = package_share(parts[index + 1])
-            except Exception:
-                continue
-            if share and os.path.realpath(share) == os.path.realpath(
-                    os.sep.join(parts[:index + 2])):
-                return os.path.realpath(share)
-    return None
 
 
 def _read_file(uri, path):
