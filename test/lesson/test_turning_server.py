@@ -8,6 +8,7 @@ from rcl_interfaces.srv import GetParameters
 from rclpy.parameter import Parameter
 from service_tutorial.conversions import yaw_of
 from service_tutorial.lesson.robot_turning_server import RobotTurningServer
+from service_tutorial.world_node.pacing import MAX_TICK_SIMULATED
 from srv_interfaces.srv import ControlTurningMessage
 
 pytestmark = pytest.mark.ros
@@ -78,11 +79,17 @@ def test_two_seconds_at_half_a_radian_per_second_turn_tinybot_one_radian(turning
 
 
 @pytest.mark.parametrize('time_duration, angular_vel', [(1, 0.1), (1, 1.5), (5, -0.5)])
-def test_turning_error_stays_under_two_percent(turning_world, time_duration, angular_vel):
+def test_turning_error_stays_under_two_percent_and_a_tick(turning_world, time_duration,
+                                                          angular_vel):
     response, turned = turning_world.turn(time_duration, angular_vel)
 
     assert response.success
-    assert turned == pytest.approx(time_duration * angular_vel, rel=0.02)
+    # The server's stop reaches the world's next tick, up to MAX_TICK_SIMULATED of simulated
+    # time later: so much more turning is the world's pace, not the server's error. The
+    # benchmark's turning rows hold the server to 2 % alone, on a quiet machine.
+    late = abs(angular_vel) * MAX_TICK_SIMULATED
+    assert turned == pytest.approx(time_duration * angular_vel,
+                                   abs=0.02 * abs(time_duration * angular_vel) + late)
 
 
 def test_server_keeps_serving_during_a_turn_and_queues_the_next(turning_world):
