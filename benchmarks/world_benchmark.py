@@ -77,7 +77,8 @@ class Config:
     scan_repeats: int = 300                # scans per timing of the laser rows
     camera_frames: int = 20                # frames per timing of the robot camera row
     standard_batch: int = 50               # tinybots of a SpawnEntities batch and its states
-    standard_rounds: int = 5               # alternating rounds of the batch and stepping rows
+    standard_rounds: int = 5               # alternating rounds of the batch rows
+    standard_step_rounds: int = 9          # alternating rounds of the stepping row, best of
     standard_steps: int = 10_000           # steps of one StepSimulation call
     standard_step_robots: int = 10         # driving tinybots stepped
     standard_calls: int = 100              # GetEntitiesStates round trips
@@ -90,7 +91,7 @@ QUICK = Config(calls=5, growth_counts=(1, 2), growth_calls=3, robot_counts=(1,),
                durations=(1,), velocities=(0.5,), turning_rtf=4.0, turning_check_rtfs=(),
                core_spawns=3, cost_counts=(1, 2), cost_calls=3, box_count=5, step_rounds=2,
                step_count=200, camera_window=0.3, scan_repeats=20, camera_frames=2,
-               standard_batch=3, standard_rounds=1, standard_steps=200,
+               standard_batch=3, standard_rounds=1, standard_step_rounds=2, standard_steps=200,
                standard_step_robots=2, standard_calls=3)
 
 

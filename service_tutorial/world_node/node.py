@@ -4,8 +4,9 @@ The MuJoCo world node: the Gazebo of this tutorial.
 It steps a service_tutorial.sim.world.World, serves the world services under /mujoco/
 (gazebo_services.py) and the standard simulation interfaces beside them (standard/), and
 publishes /clock; each model's own topics (cmd_vel, odom and joint_states of a diff drive, its
-odometry on /tf) come from the faces of its ModelInterface, made when the model is spawned,
-and a model with topics also gets its URDF on robot_description. A Pacer decides how far each
+odometry on /tf) come from the faces of its ModelInterface, named when the model is spawned
+and made as soon as the spawn is answered, and a model with topics also gets its URDF on
+robot_description. A Pacer decides how far each
 tick steps and which streams are due. Stepping runs in a timer of the node's default callback
 group, so a service callback, a parameter change and a physics step never run at the same time
 and no locks are needed. Each tick first takes the velocity commands that came since the last
@@ -32,6 +33,7 @@ from rosgraph_msgs.msg import Clock
 from service_tutorial.conversions import fill_time_msg
 from service_tutorial.robot_files import file_model_name, read_robot_file
 from service_tutorial.sim import frames
+from service_tutorial.sim.validation import quoted
 from service_tutorial.sim.validation import WorldError
 from service_tutorial.world_node.camera_stream import CAMERA_PARAMETERS, CameraStream
 from service_tutorial.world_node.gazebo_services import GazeboServices
@@ -45,7 +47,7 @@ from service_tutorial.world_node.ros_names import normalise_namespace
 from service_tutorial.world_node.standard.features import FeatureService
 from service_tutorial.world_node.standard.simulation import SimulationServices
 from service_tutorial.world_node.standard.stepping import SteppingServices
-from service_tutorial.world_node.tf_publishing import RobotDescriptionPublisher, TransformBatch
+from service_tutorial.world_node.tf_publishing import TransformBatch
 
 PACKAGE = 'service_tutorial'
 # Wall time between two looks of the sensor faces for subscribers and for holds that end, in s.
@@ -125,8 +127,10 @@ class MujocoWorld(Node):
                                     for stream, name in RATE_PARAMETERS.items()})
         self._clock_msg = Clock()
         self.models = {}  # name -> ModelInterface, in spawn order
+        self._topics_to_make = []  # interfaces of models spawned, topics made once answered
+        # Made after the service callback that spawned returns, before the next step.
+        self._topics_due = self.create_guard_condition(self.make_model_topics)
         self._next_face_look = 0.0  # wall time
-        self.robot_descriptions = {}  # name -> RobotDescriptionPublisher, models with topics
         self.viewer = None
         self.requested_steps = RequestedSteps(self)  # StepSimulation, SimulateSteps
         self.quitting = Future()  # done when a client asks the world to quit: main() ends
@@ -151,6 +155,7 @@ class MujocoWorld(Node):
             robot_file = read_robot_file(path)
             self.spawn_model(name, robot_file.urdf, namespace, position, orientation, '',
                              base_dir=robot_file.base_dir)
+        self.make_model_topics()
         # What a reset of spawned entities keeps: these very models, not others by their names.
         self.start_up_models = frozenset(self.world.models.values())
         if parameters['paused']:
@@ -189,6 +194,9 @@ class MujocoWorld(Node):
         """Stop or resume stepping, whether the parameter or a pause service asked."""
         if changes['paused']:
             self.world.pause()
+            # Free-running, /clock lags the steps by up to a period: the latched message a
+            # late subscriber gets must be the time the world stopped at.
+            self.publish_clock()
         else:
             self.requested_steps.stop('set playing')
             self.world.unpause()
@@ -204,6 +212,7 @@ class MujocoWorld(Node):
         """Advance the physics as the pacer says, publishing what falls due on the way."""
         world, pacer = self.world, self.pacer
         pacer.start_tick()
+        self.make_model_topics()
         for model in self.models.values():
             model.take_commands()  # they never wake the executor: see taken_at_tick.py
         stepping = self.requested_steps
@@ -292,16 +301,30 @@ class MujocoWorld(Node):
         return outcomes
 
     def _give_interface(self, model, namespace, urdf):
-        """Give a model just spawned its topics; if they cannot be made, delete it again."""
-        name = model.name
+        """Name a model's topics, to be made once answered; if one cannot be, delete it again."""
         try:
-            self.models[name] = ModelInterface(self, self.world, model, namespace)
-            if self.models[name].faces:
-                self.robot_descriptions[name] = RobotDescriptionPublisher(self, namespace, urdf)
+            interface = self.models[model.name] = ModelInterface(
+                self, self.world, model, namespace, urdf)
         except Exception:
-            self._forget_model(name)
-            self.world.delete_model(name)
+            self.world.delete_model(model.name)
             raise
+        self._topics_to_make.append(interface)
+        self._topics_due.trigger()
+
+    def make_model_topics(self):
+        """Make the topics of the models spawned since the last call, if still in the world."""
+        waiting, self._topics_to_make = self._topics_to_make, []
+        for interface in waiting:
+            name = interface.model_name
+            if self.models.get(name) is not interface:
+                continue  # deleted, or deleted and spawned again, before its topics were made
+            try:
+                interface.make_topics()
+            except Exception as error:  # the middleware's: every name was checked at spawn
+                self.get_logger().error(f'could not make the topics of model {quoted(name)} '
+                                        f'({error}); removed it from the world')
+                self.models.pop(name)
+                self.world.delete_model(name)
 
     def delete_model(self, name):
         """Remove a model from the world along with its ROS interface."""
@@ -323,10 +346,9 @@ class MujocoWorld(Node):
 
     def _forget_model(self, name):
         """Destroy the ROS interface of a model that left the world."""
-        for interfaces in (self.models, self.robot_descriptions):
-            interface = interfaces.pop(name, None)
-            if interface is not None:
-                interface.destroy()
+        interface = self.models.pop(name, None)
+        if interface is not None:
+            interface.destroy()
 
     def after_reset(self):
         """Start the streams again from the world's time after a reset, and publish it."""

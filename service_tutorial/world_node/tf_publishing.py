@@ -60,16 +60,24 @@ class RobotDescriptionPublisher:
     """A model's URDF on `<namespace>/robot_description`, latched for late subscribers."""
 
     def __init__(self, node, namespace, urdf):
-        """Publish the URDF text once; namespace is normalised ('' or '/a/b')."""
+        """Name the topic (namespace normalised: '' or '/a/b'); make_topics() makes it."""
         self.node = node
+        self.topics = (topic_prefix(namespace) + 'robot_description',)
         if isinstance(urdf, bytes):
             urdf = urdf.decode('utf-8', errors='replace')
+        self.urdf = urdf
+        self.robot_description_pub = None
+
+    def make_topics(self):
+        """Make the topic and publish the URDF text once."""
         # One per robot: without rclpy's default event handlers it costs the executor nothing.
-        self.robot_description_pub = node.create_publisher(
-            String, topic_prefix(namespace) + 'robot_description', LATCHED_QOS,
+        self.robot_description_pub = self.node.create_publisher(
+            String, self.topics[0], LATCHED_QOS,
             event_callbacks=PublisherEventCallbacks(use_default_callbacks=False))
-        self.robot_description_pub.publish(String(data=urdf))
+        self.robot_description_pub.publish(String(data=self.urdf))
 
     def destroy(self):
-        """Remove the topic from the node."""
-        self.node.destroy_publisher(self.robot_description_pub)
+        """Remove the topic from the node, if make_topics() made it."""
+        if self.robot_description_pub is not None:
+            self.node.destroy_publisher(self.robot_description_pub)
+            self.robot_description_pub = None

@@ -75,6 +75,8 @@ def twist_values(msg):
 ENTITY_BOMB = ('<!DOCTYPE robot [<!ENTITY a0 "lol">' + ''.join(
     f'<!ENTITY a{i} "{f"&a{i - 1};" * 10}">' for i in range(1, 10)) +
     ']><robot name="&a9;"><link name="a"/></robot>')
+# One token: the world's checks pass it, the middleware's limit (247 characters) does not.
+LONG_TOPIC = 's' * 250
 TWENTY_MEGABYTES = robot(link('a'), '<!--' + 'x' * (20 * 1024 * 1024) + '-->')
 
 # (case id, model_name, model_xml, initial pose, reference_frame, robot_namespace,
@@ -100,6 +102,11 @@ BAD_SPAWNS = [
      'with a letter or underscore and hold only ASCII letters, digits and underscores'),
     ('300-character namespace', 'newcomer', read_model('r2d2'), pose(), '', 'n' * 300,
      f"robot namespace '{'n' * 80}...' (300 characters) is longer than 200 characters"),
+    ('plugin topic longer than the middleware takes', 'newcomer',
+     read_model('tinybot').replace('<remapping>~/out:=scan</remapping>',
+                                   f'<remapping>~/out:={LONG_TOPIC}</remapping>'), pose(), '', '',
+     f"topic '{LONG_TOPIC[:80]}...' (250 characters) of model 'newcomer' is not a valid ROS "
+     "topic name here: failed to resolve name: topic length should not exceed '255U - 8U'"),
     ('empty model_xml', 'newcomer', '', pose(), '', '', 'model_xml is empty'),
     ('XML that does not parse', 'newcomer', '<robot name="r"><link name="a">', pose(), '', '',
      'model_xml does not parse as XML: Premature end of data in tag link line 1, line 1, '

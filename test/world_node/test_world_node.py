@@ -251,3 +251,28 @@ def test_clock_goes_forward_in_whole_steps_at_most_at_its_rate(ros, factor):
     # 250 Hz of simulation time at the most (half a step of slack), never backwards.
     assert all(later - earlier > 0.004 - 0.001 for earlier, later in zip(stamps, stamps[1:]))
     assert stamps[-1] - stamps[0] >= 1.0
+
+
+def test_a_model_deleted_before_its_topics_are_made_leaves_none_behind(rclpy_session):
+    from rclpy.parameter import Parameter
+    from service_tutorial.world_node.node import MujocoWorld
+    # Not spun: the test plays the executor, making the topics when it says.
+    node = MujocoWorld(parameter_overrides=[Parameter('paused', value=True)])
+    try:
+        def topics():
+            return ({publisher.topic_name for publisher in node.publishers}
+                    | {subscription.topic_name for subscription in node.subscriptions})
+
+        identity = (1.0, 0.0, 0.0, 0.0)
+        node.spawn_model('tiny', read_model('tinybot'), 'tiny', (2.0, 0.0, 0.0), identity, '')
+        assert not {topic for topic in topics() if topic.startswith('/tiny/')}, \
+            'the topics are made once the spawn is answered'
+        node.delete_model('tiny')
+        node.spawn_model('tiny', read_model('tinybot'), 'other', (2.0, 0.0, 0.0), identity, '')
+        node.make_model_topics()
+        # The first 'tiny' left before its topics were made; the second has its own only.
+        assert not {topic for topic in topics() if topic.startswith('/tiny/')}
+        assert {'/other/cmd_vel', '/other/odom', '/other/scan'} <= topics()
+        assert list(node.models) == ['tinybot', 'tiny'] == node.world.model_names()
+    finally:
+        node.destroy_node()

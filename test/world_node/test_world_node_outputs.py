@@ -151,7 +151,8 @@ def test_robot_description_reaches_a_subscriber_that_starts_after_the_world(ros)
     for topic, received in descriptions.items():
         assert [msg.data for msg in received] == [read_model('tinybot')], topic
     # R2-D2 has no plugin with topics, so no description; a deleted model takes its own away.
-    assert set(world.node.robot_descriptions) == {'tinybot', 'tiny'}
+    assert {name for name, interface in world.node.models.items()
+            if interface.description is not None} == {'tinybot', 'tiny'}
     response = world.delete('tiny')
     assert response.success, response.status_message
     assert '/robots/tiny/robot_description' not in world.published_topics()

@@ -23,7 +23,7 @@ class CameraFace(SensorFace, sensor_type=CameraSensor):
     """A camera's sensor_msgs/Image and CameraInfo (gazebo_ros_camera, ROS 1 and ROS 2)."""
 
     def __init__(self, node, world, model, plugin, namespace):
-        """Place the image and camera_info topics and describe the camera once."""
+        """Name the image and camera_info topics and the frame of the images."""
         super().__init__(node, world, model, plugin, namespace)
         sensor = plugin
         block, config = sensor.block, sensor.config
@@ -38,18 +38,24 @@ class CameraFace(SensorFace, sensor_type=CameraSensor):
         else:
             camera_name = block.text('camera_name', config.name)
             image_topic, info_topic = f'{camera_name}/image_raw', f'{camera_name}/camera_info'
-        baseline = _number(block, 'hackBaseline' if ros1 else 'hack_baseline')
-        frame = sensor_frame(block, ros1, sensor)
+        self.baseline = _number(block, 'hackBaseline' if ros1 else 'hack_baseline')
+        self.frame = sensor_frame(block, ros1, sensor)
+        self.topics = tuple(plugin_topic(block, topic, robot_namespace=namespace)
+                            for topic in (image_topic, info_topic))
+        self.image_pub = self.info_pub = self.image_msg = self.info_msg = None
+
+    def make_topics(self):
+        """Make the image and camera_info topics and describe the camera once."""
+        config = self.sensor.config
         self.image_msg = Image()
-        self.image_msg.header.frame_id = frame
+        self.image_msg.header.frame_id = self.frame
         self.image_msg.height, self.image_msg.width = config.height, config.width
         self.image_msg.encoding = config.encoding
         self.image_msg.step = config.width * (1 if config.encoding == 'mono8' else 3)
-        self.info_msg = camera_info(config, frame, baseline)
-        self.image_pub = self.publisher(
-            Image, plugin_topic(block, image_topic, robot_namespace=namespace), 2)
-        self.info_pub = self.publisher(
-            CameraInfo, plugin_topic(block, info_topic, robot_namespace=namespace), 2)
+        self.info_msg = camera_info(config, self.frame, self.baseline)
+        image_topic, info_topic = self.topics
+        self.image_pub = self.publisher(Image, image_topic, 2)
+        self.info_pub = self.publisher(CameraInfo, info_topic, 2)
 
     def publish_reading(self, sensor):
         """Publish the frame the camera just rendered, and its camera_info."""

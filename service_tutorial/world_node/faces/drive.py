@@ -47,38 +47,27 @@ class DriveFace(PluginFace):
         return plugin.is_drive
 
     def __init__(self, node, world, model, plugin, namespace):
-        """Make the drive's topics; namespace is the model's, normalised ('' or '/a/b')."""
+        """Name the drive's topics; namespace is the model's, normalised ('' or '/a/b')."""
         self.node = node
         self.world = world
         self.model = model
         self.drive = plugin
         config, block = plugin.config, plugin.block
-        # Every name is worked out before a topic is made: a bad one leaves nothing behind.
         cmd_vel_topic, odom_topic, joint_states_topic = (
             plugin_topic(block, topic, robot_namespace=namespace, ros1_tag=ros1_tag)
             for topic, ros1_tag in (('cmd_vel', 'commandTopic'), ('odom', 'odometryTopic'),
                                     ('joint_states', None)))
-        # Without rclpy's default event handlers (they log incompatible QoS), a topic costs
-        # the executor nothing; with them, every robot's added several waitables to every
-        # turn, and 50 robots' 400 were most of the world's CPU at real time. The node takes
-        # the commands at each tick (take_commands), so they never wake its executor.
-        self.cmd_vel_sub = node.create_subscription(
-            Twist, cmd_vel_topic, self.cmd_vel_callback, 10, callback_group=TakenAtTick(),
-            event_callbacks=SubscriptionEventCallbacks(use_default_callbacks=False))
+        self.topics = (cmd_vel_topic,
+                       *((odom_topic,) if config.publish_odom else ()),
+                       *((joint_states_topic,) if publishes_joint_states(plugin) else ()))
         self.encoder_odometry = config.odometry_source == ODOMETRY_SOURCE_ENCODER
-        self.odom_pub = self.joint_states_pub = None
+        self.cmd_vel_sub = self.odom_pub = self.joint_states_pub = None
         self._publishers = {}  # stream -> (publish(now), SubscriberWatch of its topic)
-        quiet = PublisherEventCallbacks(use_default_callbacks=False)
-        if config.publish_odom:
-            self.odom_pub = node.create_publisher(Odometry, odom_topic, 10,
-                                                  event_callbacks=quiet)
-            self._publishers[ODOMETRY_STREAM] = (self.publish_odometry,
-                                                 SubscriberWatch(self.odom_pub))
-        if publishes_joint_states(plugin):
-            self.joint_states_pub = node.create_publisher(JointState, joint_states_topic, 10,
-                                                          event_callbacks=quiet)
-            self._publishers[JOINT_STATES_STREAM] = (self.publish_joint_states,
-                                                     SubscriberWatch(self.joint_states_pub))
+        self.odom_msg = self.joint_states_msg = None
+
+    def make_topics(self):
+        """Make the drive's topics: cmd_vel, and odom and joint_states as the block asks."""
+        node, topics, config = self.node, iter(self.topics), self.drive.config
         # Filled in and published again every time: publish() copies the message.
         self.odom_msg = Odometry()
         if config.covariance is not None:
@@ -87,6 +76,24 @@ class DriveFace(PluginFace):
                 matrix = self.odom_msg.pose if index < 6 else self.odom_msg.twist
                 matrix.covariance[7 * (index % 6)] = float(variance)
         self.joint_states_msg = JointState()
+        # Without rclpy's default event handlers (they log incompatible QoS), a topic costs
+        # the executor nothing; with them, every robot's added several waitables to every
+        # turn, and 50 robots' 400 were most of the world's CPU at real time. The node takes
+        # the commands at each tick (take_commands), so they never wake its executor.
+        self.cmd_vel_sub = node.create_subscription(
+            Twist, next(topics), self.cmd_vel_callback, 10, callback_group=TakenAtTick(),
+            event_callbacks=SubscriptionEventCallbacks(use_default_callbacks=False))
+        quiet = PublisherEventCallbacks(use_default_callbacks=False)
+        if config.publish_odom:
+            self.odom_pub = node.create_publisher(Odometry, next(topics), 10,
+                                                  event_callbacks=quiet)
+            self._publishers[ODOMETRY_STREAM] = (self.publish_odometry,
+                                                 SubscriberWatch(self.odom_pub))
+        if publishes_joint_states(self.drive):
+            self.joint_states_pub = node.create_publisher(JointState, next(topics), 10,
+                                                          event_callbacks=quiet)
+            self._publishers[JOINT_STATES_STREAM] = (self.publish_joint_states,
+                                                     SubscriberWatch(self.joint_states_pub))
 
     def publish(self, stream, now):
         """Publish what belongs to a stream that fell due at simulation time now."""
@@ -144,7 +151,9 @@ class DriveFace(PluginFace):
 
     def destroy(self):
         """Remove the drive's topics from the node."""
-        self.node.destroy_subscription(self.cmd_vel_sub)
+        if self.cmd_vel_sub is not None:
+            self.node.destroy_subscription(self.cmd_vel_sub)
         for publisher in (self.odom_pub, self.joint_states_pub):
             if publisher is not None:
                 self.node.destroy_publisher(publisher)
+        self.cmd_vel_sub = self.odom_pub = self.joint_states_pub = None

@@ -2,7 +2,9 @@
 What the world node asks of the ROS face of one plugin: the protocol every face meets.
 
 A face gives one plugin of a model its topics. The world node makes the faces of a model when
-the model is spawned (model_interface.ModelInterface) and, at each tick, hands each face what
+the model is spawned (model_interface.ModelInterface): each works out its topics' names then,
+so that a bad one refuses the spawn, and makes them in make_topics(), once the spawn is answered.
+From then on the node hands each face, at each tick, what
 concerns it: the publication streams that fell due (publish), the commands that came since the
 last tick (take_commands, for a face that declares takes_commands), and a look for subscribers
 once a watcher's next_look comes. Faces inherit the defaults written here, so each says only
@@ -27,11 +29,12 @@ class PluginFace(Protocol):
     The ROS face of one plugin of a model.
 
     A face is made as Face(node, world, model, plugin, namespace), namespace being the model's
-    ('' or '/a/b'), and makes the plugin's topics on node.
+    ('' or '/a/b'), and makes the plugin's topics on node in make_topics().
     """
 
     streams: ClassVar[tuple] = ()  # the node's publication streams the face publishes on
     takes_commands: ClassVar[bool] = False  # whether the node hands it take_commands()
+    topics: Sequence[str] = ()  # the names of the topics make_topics() makes
 
     @classmethod
     def applies_to(cls, plugin) -> bool:
@@ -43,6 +46,9 @@ class PluginFace(Protocol):
         """Return what the node has look for subscribers."""
         return ()
 
+    def make_topics(self) -> None:
+        """Make the face's topics on the node."""
+
     def publish(self, stream, now: float) -> None:
         """Publish the face's part of a stream that fell due at simulation time now."""
 
@@ -50,4 +56,4 @@ class PluginFace(Protocol):
         """Hand the plugin the commands that came since the last tick."""
 
     def destroy(self) -> None:
-        """Remove the face's topics from the node."""
+        """Remove the face's topics from the node, if make_topics() made them."""

@@ -17,7 +17,7 @@ class ImuFace(SensorFace, sensor_type=ImuSensor):
     """An IMU's sensor_msgs/Imu (gazebo_ros_imu, ROS 1; gazebo_ros_imu_sensor, ROS 2)."""
 
     def __init__(self, node, world, model, plugin, namespace):
-        """Place the topic and fill in the covariances, which follow from the noise."""
+        """Name the topic and the frame of the IMU's readings."""
         super().__init__(node, world, model, plugin, namespace)
         sensor = plugin
         block = sensor.block
@@ -27,13 +27,20 @@ class ImuFace(SensorFace, sensor_type=ImuSensor):
                                  ros1_tag='topicName')
         else:
             topic = plugin_topic(block, '~/out', robot_namespace=namespace)
+        self.frame = sensor_frame(block, ros1, sensor)
+        self.topics = (topic,)
+        self.imu_pub = self.imu_msg = None
+
+    def make_topics(self):
+        """Make the IMU's topic and fill in the covariances, which follow from the noise."""
+        sensor = self.sensor
         msg = self.imu_msg = Imu()
-        msg.header.frame_id = sensor_frame(block, ros1, sensor)
+        msg.header.frame_id = self.frame
         msg.orientation_covariance = diagonal(sensor.covariance('orientation'))
         msg.angular_velocity_covariance = diagonal(sensor.covariance('angular_velocity'))
         msg.linear_acceleration_covariance = diagonal(
             sensor.covariance('linear_acceleration'))
-        self.imu_pub = self.publisher(Imu, topic, 10)
+        self.imu_pub = self.publisher(Imu, self.topics[0], 10)
 
     def publish_reading(self, sensor):
         """Publish the IMU's latest reading."""

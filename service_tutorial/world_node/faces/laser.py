@@ -22,10 +22,10 @@ class LaserScanFace(SensorFace, sensor_type=RaySensor):
     """A laser's sensor_msgs/LaserScan (gazebo_ros_laser, gazebo_ros_ray_sensor)."""
 
     def __init__(self, node, world, model, plugin, namespace):
-        """Place the scan topic and fill in what every scan of this laser shares."""
+        """Name the scan topic and the frame every scan of this laser names."""
         super().__init__(node, world, model, plugin, namespace)
         sensor = plugin
-        block, config = sensor.block, sensor.config
+        block = sensor.block
         ros1 = 'gazebo_ros_laser' in block.filename
         if ros1:
             # Without a topicName, gazebo_ros_laser publishes on /world (sic).
@@ -38,14 +38,21 @@ class LaserScanFace(SensorFace, sensor_type=RaySensor):
                 node.get_logger().warning(
                     f'laser {quoted(block.name)} asks for {quoted(output_type)}; only '
                     f'{LASER_SCAN_TYPE} is simulated, on {topic}')
+        self.frame = sensor_frame(block, ros1, sensor)
+        self.topics = (topic,)
+        self.scan_pub = self.scan_msg = None
+
+    def make_topics(self):
+        """Make the scan topic and fill in what every scan of this laser shares."""
+        config = self.sensor.config
         msg = self.scan_msg = LaserScan()
-        msg.header.frame_id = sensor_frame(block, ros1, sensor)
+        msg.header.frame_id = self.frame
         msg.angle_min, msg.angle_max = config.angle_min, config.angle_max
         msg.angle_increment = config.angle_increment
         msg.time_increment = 0.0  # every beam of a scan is cast at the same instant
-        msg.scan_time = sensor.period
+        msg.scan_time = self.sensor.period
         msg.range_min, msg.range_max = config.range_min, config.range_max
-        self.scan_pub = self.publisher(LaserScan, topic, 10)
+        self.scan_pub = self.publisher(LaserScan, self.topics[0], 10)
 
     def publish_reading(self, sensor):
         """Publish the scan the laser just made."""

@@ -53,7 +53,7 @@ class SensorFace(PluginFace):
         return isinstance(plugin, cls.sensor_type)
 
     def __init__(self, node, world, model, plugin, namespace):
-        """Start with no topics; each kind makes its own with publisher()."""
+        """Start with no topics; each kind names its own and makes them with publisher()."""
         self.node = node
         self.sensor = sensor = plugin
         self.watch = SubscriberWatch()  # the sensor's publishers
@@ -63,7 +63,7 @@ class SensorFace(PluginFace):
         sensor.listener = self.reading_callback
 
     def publisher(self, msg_type, topic, depth):
-        """Make a publisher of one of the sensor's topics."""
+        """Make a publisher of one of the sensor's topics (in make_topics())."""
         # Without rclpy's two default event handlers, a publisher costs the executor nothing.
         publisher = self.node.create_publisher(
             msg_type, topic, depth,

@@ -40,7 +40,8 @@ class SpawnPlanner:
         self._world = world
         self._package_share = package_share
         self._taken = set(world.models)
-        self._texts = {}  # resource_string -> RobotText, so a fleet's URDF is parsed once
+        # (uri, resource_string) -> RobotText: a fleet's URDF is read and parsed once a call.
+        self._robots = {}
 
     def plan(self, *, name, allow_renaming, uri, resource_string, entity_namespace,
              initial_pose):
@@ -59,12 +60,10 @@ class SpawnPlanner:
             namespace=namespace)
 
     def _robot(self, uri, resource_string):
-        if uri or resource_string not in self._texts:
-            robot = read_resource(uri, resource_string, self._package_share)
-            if uri:
-                return robot
-            self._texts[resource_string] = robot
-        return self._texts[resource_string]
+        key = (uri, '' if uri else resource_string)  # the uri wins
+        if key not in self._robots:
+            self._robots[key] = read_resource(uri, resource_string, self._package_share)
+        return self._robots[key]
 
     def _name(self, name, robot_name, allow_renaming):
         """Return the entity's final name, or refuse the request."""
