@@ -85,6 +85,16 @@ class OffscreenCamera:
         camera is a mujoco.MjvCamera or the id or name of a camera of the model; fovy is the
         vertical field of view in degrees, near and far the clipping distances in metres.
         """
+        self.take_snapshot(model, data, camera, fovy, near, far)
+        return self.render_snapshot()
+
+    def take_snapshot(self, model, data, camera, fovy, near, far):
+        """
+        Copy the scene as render_view() would see it; render_snapshot() draws it later.
+
+        The copy is quick and reads the model and data, so it belongs on the thread that steps
+        them; drawing it may happen on another thread, before the next snapshot is taken.
+        """
         if model is not self._scene_model:
             self._make_renderer(model)
         self._renderer.update_scene(data, camera)
@@ -96,6 +106,9 @@ class OffscreenCamera:
             eye.frustum_top, eye.frustum_bottom = half_height, -half_height
             eye.frustum_center = 0.0
             eye.frustum_width = 0.0  # 0: from the image's aspect ratio
+
+    def render_snapshot(self):
+        """Draw the last snapshot as an (height, width, 3) uint8 RGB image, on any thread."""
         try:
             return self._renderer.render()
         finally:

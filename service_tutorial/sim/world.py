@@ -18,6 +18,7 @@ from service_tutorial.sim import plugins
 from service_tutorial.sim import scene
 from service_tutorial.sim import spawning
 from service_tutorial.sim import validation
+from service_tutorial.sim.background_renders import BackgroundRenders
 from service_tutorial.sim.core_logs import core_logger
 from service_tutorial.sim.description_cache import DescriptionCache
 from service_tutorial.sim.model import Model
@@ -54,12 +55,12 @@ class World:
     """
 
     def __init__(self, *, timestep=0.002, gravity=(0.0, 0.0, -9.81), cmd_vel_timeout=0.5,
-                 package_resolver=None, scenery=None):
+                 package_resolver=None, scenery=None, background_rendering=False):
         """
         Create a world without models, with the static obstacles of a scenery file if given.
 
-        package_resolver maps a package name to its share folder, for package:// meshes;
-        without one, such meshes are refused.
+        package_resolver maps a package name to its share folder, for package:// meshes (none:
+        refused); background_rendering draws cameras on a thread (background_renders.py).
         """
         timestep = validation.finite_number(timestep, 'timestep')
         if timestep <= 0.0:
@@ -82,6 +83,7 @@ class World:
         self._model = self._spec.compile()
         self._data = mujoco.MjData(self._model)
         self._recovery = Recovery(self)
+        self.background_renders = BackgroundRenders() if background_rendering else None
         self.forward()
 
     # ---------------------------------------------------------------- accessors

@@ -120,7 +120,8 @@ class MujocoWorld(Node):
         self.world = World(timestep=parameters['timestep'],
                            cmd_vel_timeout=parameters['cmd_vel_timeout'],
                            package_resolver=get_package_share_directory,
-                           scenery=resolve_model_path(scenery) if scenery else None)
+                           scenery=resolve_model_path(scenery) if scenery else None,
+                           background_rendering=True)  # a camera never holds up an answer
         self.pacer = Pacer(timestep=self.world.timestep,
                            real_time_factor=parameters['real_time_factor'],
                            periods={stream: 1.0 / parameters[name]
@@ -238,6 +239,7 @@ class MujocoWorld(Node):
         """Publish /clock, the models' streams and the camera where their time has come."""
         for name in self.world.take_removed_models():  # they kept blowing up
             self._forget_model(name)
+        self.world.background_renders.deliver()  # the cameras' frames drawn meanwhile
         now = self.world.time
         for stream, stamp in self.pacer.take_due(now):
             if stream == CLOCK_STREAM:
@@ -380,6 +382,7 @@ class MujocoWorld(Node):
             self.viewer.close()
             self.viewer = None
         self.camera_stream.close()
+        self.world.background_renders.close()
         self.forwarded_logs.stop()
         # An action server keeps the node's handle alive (and its /rosout) until destroyed.
         self.stepping_services.destroy()

@@ -109,9 +109,13 @@ def test_the_default_tinybots_ros2_camera_renders_at_its_rate_only_while_watched
     assert image.header.frame_id == 'camera_link'
     pixels = np.frombuffer(bytes(image.data), dtype=np.uint8).reshape(240, 320, 3)
     assert pixels.std() > 10.0, 'the yard should not look like one flat colour'
-    # 10 Hz in simulation time, stamped with it.
+    # 10 Hz in simulation time, stamped with it; a frame that would fall due while the one
+    # before is still being drawn is skipped (software rendering can be slower than 10 Hz),
+    # and the next comes a whole number of periods later, give or take a physics step.
     stamps = [seconds(msg.header.stamp) for msg in images]
-    assert np.diff(stamps[1:]) == pytest.approx([0.1] * (len(stamps) - 2), abs=1e-6)
+    gaps = np.diff(stamps)
+    assert np.all(gaps >= 0.1 - 1e-6), stamps
+    assert gaps / 0.1 == pytest.approx(np.round(gaps / 0.1), abs=0.002 / 0.1 + 1e-6), stamps
     assert ros.wait_for(lambda: infos, timeout=10.0)
     focal = 320 / 2 / math.tan(1.3962634 / 2)
     assert list(infos[-1].k) == pytest.approx([focal, 0, 159.5, 0, focal, 119.5, 0, 0, 1])

@@ -3,8 +3,10 @@ The Gazebo camera plugin (gazebo_ros_camera, ROS 1 and ROS 2), simulation side.
 
 A <sensor type="camera"> becomes a MuJoCo camera on the link, rendered offscreen by the same
 renderer as the world's scene camera (rendering.py), with the block's image size, horizontal
-field of view and clipping distances. Gazebo's camera looks along the x axis of its link with
-z up; MuJoCo's looks along -z with y up, hence the fixed turn OPTICAL_TURN between the two.
+field of view and clipping distances; in a world that renders in the background
+(background_renders.py), each frame is drawn on the rendering thread and handed on once drawn.
+Gazebo's camera looks along the x axis of its link with z up; MuJoCo's looks along -z with y
+up, hence the fixed turn OPTICAL_TURN between the two.
 """
 
 from dataclasses import dataclass
@@ -12,6 +14,7 @@ import math
 
 import mujoco
 import numpy as np
+from service_tutorial.sim.core_logs import core_logger
 from service_tutorial.sim.description import UrdfError
 from service_tutorial.sim.plugins.sensor import Sensor
 from service_tutorial.sim.plugins.sensor import sensor_of
@@ -20,6 +23,8 @@ from service_tutorial.sim.plugins.sensor import SensorConfig
 from service_tutorial.sim.rendering import OffscreenCamera
 from service_tutorial.sim.rendering import pinhole_matrix
 from service_tutorial.sim.validation import quoted
+
+_logger = core_logger(__name__)
 
 # From a Gazebo camera's frame (x forward, z up) to MuJoCo's (-z forward, y up), (w, x, y, z).
 OPTICAL_TURN = (0.5, 0.5, -0.5, -0.5)
@@ -92,6 +97,7 @@ class CameraSensor(Sensor):
         self.image = None
         self._view = OffscreenCamera(config.width, config.height)
         self._camera_id = -1
+        self._fell_behind = False  # said once in the log
 
     @classmethod
     def configure(cls, block, robot):
@@ -115,19 +121,57 @@ class CameraSensor(Sensor):
         self._camera_id = model.element_id(world.model, mujoco.mjtObj.mjOBJ_CAMERA,
                                            self.config.site_name(self.kind))
 
+    def update(self, now):
+        """Take a reading; in the background, skip it while the last frame is being drawn."""
+        renders = self.world.background_renders
+        if renders is None:
+            super().update(now)
+            return
+        if renders.busy(self):
+            if not self._fell_behind:
+                self._fell_behind = True
+                _logger.warning(
+                    "camera %s of model '%s' takes longer to render than its period of %.3g s: "
+                    'frames are skipped until it catches up', quoted(self.config.name),
+                    self.model.name, self.period)
+        else:
+            self._snapshot()
+            renders.submit(self, self._drawn, self.world.time)
+        self.schedule_next(now)
+
+    def frame_rendered(self, pixels, taken_at):
+        """Take a frame drawn in the background as the reading of simulation time taken_at."""
+        if not self.active:  # nobody listens any more
+            return
+        self.image = pixels
+        self.reading_time = taken_at
+        if self.listener is not None:
+            self.listener(self)
+
     def read(self):
         """Render the world from the camera, in the block's encoding."""
+        self._snapshot()
+        self.image = self._drawn()
+
+    def _snapshot(self):
         config = self.config
-        pixels = self._view.render_view(self.world.model, self.world.data, self._camera_id,
-                                        config.fovy, config.near, config.far)
-        if config.encoding == 'bgr8':
+        self._view.take_snapshot(self.world.model, self.world.data, self._camera_id,
+                                 config.fovy, config.near, config.far)
+
+    def _drawn(self):
+        """Draw the last snapshot in the block's encoding."""
+        pixels = self._view.render_snapshot()
+        encoding = self.config.encoding
+        if encoding == 'bgr8':
             pixels = np.ascontiguousarray(pixels[:, :, ::-1])
-        elif config.encoding == 'mono8':
+        elif encoding == 'mono8':
             pixels = np.round(pixels @ _LUMA).astype(np.uint8)
-        self.image = pixels
+        return pixels
 
     def close(self):
-        """Release the renderer and its GL context."""
+        """Release the renderer and its GL context, once a frame being drawn is done."""
+        if self.world is not None and self.world.background_renders is not None:
+            self.world.background_renders.forget(self)
         self._view.close()
 
 

@@ -119,12 +119,16 @@ class Sensor(Plugin):
         """Take a reading, schedule the next one at the sensor's rate, tell the listener."""
         self.read()
         self.reading_time = self.world.time
+        self.schedule_next(now)
+        if self.listener is not None:
+            self.listener(self)
+
+    def schedule_next(self, now):
+        """Schedule the next reading one period after the one due by simulation time now."""
         period = self.period
         self._next_reading += period
         if self._next_reading <= now:  # late, after a pause in activity: go on from now
-            self._next_reading = self.reading_time + period
-        if self.listener is not None:
-            self.listener(self)
+            self._next_reading = self.world.time + period
 
     def read(self):
         """Measure the world now and keep the result (each kind of sensor says how)."""
