@@ -19,9 +19,13 @@ from nav_msgs.msg import Odometry
 import pytest
 from rclpy.parameter import Parameter
 from repository import read_model, ROOT, TEST_MODELS
-from service_tutorial.conversions import fill_pose_msg, fill_twist_msg, yaw_of
+from service_tutorial.conversions import fill_pose_msg, fill_twist_msg, seconds_of, yaw_of
 from service_tutorial.lesson.robot_turning_server import RobotTurningServer
 from service_tutorial.sim.plugins.diff_drive import MAX_WHEEL_RIM_SPEED
+from service_tutorial.world_node.node import REMOVED_MODELS_QOS
+from simulation_interfaces.msg import Result
+from simulation_interfaces.srv import GetEntities
+from srv_interfaces.msg import RemovedModel
 from srv_interfaces.srv import ControlTurningMessage, DeleteModel, GetModelState, SetModelState
 
 pytestmark = pytest.mark.ros
@@ -567,6 +571,18 @@ def test_a_model_that_cannot_be_simulated_is_removed_and_the_world_goes_on(ros, 
     topics = world.topics()
     assert {'/sound/odom', '/sound/joint_states', '/sound/cmd_vel'} <= topics
     assert not [topic for topic in topics if topic.startswith('/monolith/')]
+    # The removal is announced, to a tool that starts listening afterwards too.
+    announced = []
+    ros.client_node.create_subscription(RemovedModel, '/mujoco/removed_models',
+                                        announced.append, REMOVED_MODELS_QOS)
+    assert ros.wait_for(lambda: announced, timeout=10.0), 'no message on /mujoco/removed_models'
+    assert [(msg.model_name, msg.reason) for msg in announced] == [
+        ('monolith', 'became unstable again after it was put back at its spawn pose')]
+    assert 0.2 <= seconds_of(announced[0].stamp) <= world.now()
+    # The standard interfaces no longer list it.
+    listed = world.call(GetEntities, '/get_entities', GetEntities.Request())
+    assert listed.result.result == Result.RESULT_OK, listed.result.error_message
+    assert list(listed.entities) == ['tinybot', 'sound']
     # Nothing of it is left behind: the name is free again.
     assert world.spawn('monolith', read_model('r2d2'), pose(x=2.0)).success
 
