@@ -7,6 +7,7 @@ model goes through the step as if nothing had happened.
 """
 
 import collections
+from dataclasses import dataclass
 
 import mujoco
 import numpy as np
@@ -24,6 +25,16 @@ _BAD_STATE_WARNINGS = (mujoco.mjtWarning.mjWARN_BADQPOS, mujoco.mjtWarning.mjWAR
                        mujoco.mjtWarning.mjWARN_BADQACC)
 # What a sound robot keeps of its state when the whole data has to be reset.
 _KEPT_FIELDS = ('qpos', 'qvel', 'act', 'ctrl')
+UNSTABLE_AGAIN = 'became unstable again after it was put back at its spawn pose'
+
+
+@dataclass(frozen=True)
+class Removal:
+    """A model the world removed by itself so that the others could go on."""
+
+    name: str
+    time: float  # simulation time of the removal, s
+    reason: str  # what the model did, as the world's log says: 'became unstable again...'
 
 
 def take_steps(model, data, count=1):
@@ -52,7 +63,7 @@ class Recovery:
         self._step_start_state = np.empty(size)
 
     def take_removed(self):
-        """Return the names of the models removed since the last call."""
+        """Return the Removal of every model removed since the last call, oldest first."""
         removed, self._removed = self._removed, []
         return removed
 
@@ -144,11 +155,11 @@ class Recovery:
         mujoco.mj_setState(world.model, world.data, self._step_start_state, STATE)
         self._clear_bad_state_warnings()
         if culprit.recovered:
-            _logger.error("model '%s' became unstable again after it was put back at its spawn "
-                          'pose; it is removed from the world', culprit.name)
+            _logger.error("model '%s' %s; it is removed from the world", culprit.name,
+                          UNSTABLE_AGAIN)
             world.rebuild({name: model for name, model in world.models.items()
                            if model is not culprit})
-            self._removed.append(culprit.name)
+            self._removed.append(Removal(culprit.name, world.time, UNSTABLE_AGAIN))
         else:
             self.reset_models([culprit], 'became unstable')
             culprit.recovered = True

@@ -128,7 +128,7 @@ class World:
         return list(self._models)
 
     def take_removed_models(self):
-        """Return the models the world removed by itself because they kept blowing up."""
+        """Return a recovery.Removal for each model the world removed since the last call."""
         return self._recovery.take_removed()
 
     def _spawned(self, name):

@@ -12,7 +12,8 @@ group, so a service callback, a parameter change and a physics step never run at
 and no locks are needed. Each tick first takes the velocity commands that came since the last
 one: they never wake the executor (taken_at_tick.py). A paused world steps only when a client
 asks for N steps (requested_steps.py): the timer takes them, a share of every tick, while the
-client's call waits in a callback group of its own.
+client's call waits in a callback group of its own. A model the world removes by itself,
+because it kept breaking the physics (sim/recovery.py), is announced on ~/removed_models.
 
 The parameters are declared in parameters.py, and every one that is not read-only takes
 effect as soon as it is set. What the simulation logs reaches the node's logger (and /rosout).
@@ -48,6 +49,7 @@ from service_tutorial.world_node.standard.features import FeatureService
 from service_tutorial.world_node.standard.simulation import SimulationServices
 from service_tutorial.world_node.standard.stepping import SteppingServices
 from service_tutorial.world_node.tf_publishing import TransformBatch
+from srv_interfaces.msg import RemovedModel
 
 PACKAGE = 'service_tutorial'
 # Wall time between two looks of the sensor faces for subscribers and for holds that end, in s.
@@ -55,6 +57,9 @@ FACE_LOOK_PERIOD = 0.01
 # As gazebo_ros publishes /clock: the latest time waits for every subscriber, a late one too.
 CLOCK_QOS = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
                        durability=DurabilityPolicy.TRANSIENT_LOCAL)
+# A tool that starts watching late still hears of the last few models the world removed.
+REMOVED_MODELS_QOS = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE,
+                                durability=DurabilityPolicy.TRANSIENT_LOCAL)
 # The parameter that gives each publication stream its rate, in Hz.
 RATE_PARAMETERS = {CLOCK_STREAM: 'clock_publish_rate', ODOMETRY_STREAM: 'odom_publish_rate',
                    JOINT_STATES_STREAM: 'joint_state_publish_rate'}
@@ -142,6 +147,9 @@ class MujocoWorld(Node):
             Clock, '/clock', CLOCK_QOS,
             event_callbacks=PublisherEventCallbacks(use_default_callbacks=False))
         self.tf_batch = TransformBatch(self)  # /tf, for every drive's OdomTfFace
+        # Each model the world removes by itself to save the others, with the reason.
+        self.removed_models_pub = self.create_publisher(
+            RemovedModel, '~/removed_models', REMOVED_MODELS_QOS)
         # The lesson's world services under ~/ (/mujoco/ by default), as gazebo_ros serves them.
         self.gazebo_services = GazeboServices(self)
         # The ROS 2 standard simulation interfaces, relative to the node's namespace.
@@ -237,8 +245,9 @@ class MujocoWorld(Node):
 
     def publish_due(self):
         """Publish /clock, the models' streams and the camera where their time has come."""
-        for name in self.world.take_removed_models():  # they kept blowing up
-            self._forget_model(name)
+        for removal in self.world.take_removed_models():  # they kept blowing up
+            self._forget_model(removal.name)
+            self._announce_removal(removal)
         self.world.background_renders.deliver()  # the cameras' frames drawn meanwhile
         now = self.world.time
         for stream, stamp in self.pacer.take_due(now):
@@ -256,6 +265,12 @@ class MujocoWorld(Node):
                     if wall >= watcher.next_look:
                         watcher.look(wall)
         self.camera_stream.publish_due(now)
+
+    def _announce_removal(self, removal):
+        """Tell ~/removed_models which model the world removed by itself, when and why."""
+        msg = RemovedModel(model_name=removal.name, reason=removal.reason)
+        fill_time_msg(msg.stamp, removal.time)
+        self.removed_models_pub.publish(msg)
 
     def publish_clock(self):
         """Publish the simulation time on /clock."""

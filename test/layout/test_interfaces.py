@@ -5,6 +5,7 @@ import math
 from geometry_msgs.msg import Pose
 import pytest
 from rclpy.node import Node
+from srv_interfaces.msg import RemovedModel
 from srv_interfaces.srv import ControlTurningMessage, DeleteModel, GetModelList
 from srv_interfaces.srv import GetModelState, SetModelState, SpawnModel
 
@@ -35,6 +36,11 @@ def test_model_state_services_answer_success_and_status_message():
         assert fields['status_message'] == 'string'
     assert GetModelState.Response.get_fields_and_field_types()['pose'] == 'geometry_msgs/Pose'
     assert SetModelState.Request.get_fields_and_field_types()['twist'] == 'geometry_msgs/Twist'
+
+
+def test_removed_model_names_the_model_the_reason_and_the_time():
+    assert RemovedModel.get_fields_and_field_types() == {
+        'stamp': 'builtin_interfaces/Time', 'model_name': 'string', 'reason': 'string'}
 
 
 class EchoServer(Node):

@@ -1,6 +1,7 @@
 """The drives in both spellings, with wheel pairs, and the skid steer: parameters and motion."""
 
 import math
+import re
 
 import numpy as np
 import pytest
@@ -204,6 +205,25 @@ def test_ros2_pairs_without_their_own_values_take_the_defaults():
      "<odometrySource> must be 'encoder' or 'world': 'gps'"),
     (diff_drive(ROS1_JOINTS, '<wheelTorque>-1</wheelTorque>'),
      "diff-drive <wheelTorque> must be one number > 0: '-1'"),
+    (diff_drive(ROS1_JOINTS, '<robotBaseFrame>//a//b//</robotBaseFrame>'),
+     "diff-drive <robotBaseFrame> '//a//b//' is not a valid frame id: it has an empty part "
+     "(a doubled, leading or trailing '/')"),
+    (diff_drive(ROS2_JOINTS, '<odometry_frame>odom/</odometry_frame>'),
+     "diff-drive <odometry_frame> 'odom/' is not a valid frame id: it has an empty part "
+     "(a doubled, leading or trailing '/')"),
+    (diff_drive(ROS2_JOINTS, '<robot_base_frame>base\tlink</robot_base_frame>'),
+     "diff-drive <robot_base_frame> 'base\\tlink' is not a valid frame id: it holds "
+     'whitespace or control characters'),
+    (diff_drive(ROS2_JOINTS, '<update_rate>1e308</update_rate>'),
+     'diff-drive <update_rate> must be at most 10000 Hz: 1e+308'),
+    (diff_drive(ROS1_JOINTS, '<updateRate>-1</updateRate>'),
+     "diff-drive <updateRate> must be one number >= 0: '-1'"),
+    (diff_drive(ROS1_JOINTS, '<updateRate>inf</updateRate>'),
+     "diff-drive <updateRate> contains NaN or infinity: 'inf'"),
+    (diff_drive(ROS2_JOINTS, '<wheel_separation>2e3</wheel_separation>'),
+     'diff-drive <wheel_separation> must be at most 1000 m: 2000'),
+    (diff_drive(ROS1_JOINTS, '<wheelDiameter>1e20</wheelDiameter>'),
+     'diff-drive <wheelDiameter> must be at most 1000 m: 1e+20'),
     (diff_drive(ROS2_JOINTS, '<publish_odom>maybe</publish_odom>'),
      "diff-drive <publish_odom> must be true or false: 'maybe'"),
     (diff_drive(ROS2_JOINTS, '<covariance_x>nan</covariance_x>'),
@@ -217,8 +237,15 @@ def test_ros2_pairs_without_their_own_values_take_the_defaults():
      'carries a skid-steer plugin besides another drive'),
 ])
 def test_drive_blocks_that_are_refused(plugin, message):
-    with pytest.raises(UrdfError, match=message.replace('(', r'\(').replace(')', r'\)')):
+    with pytest.raises(UrdfError, match=re.escape(message)):
         load_urdf(wheeled(plugin))
+
+
+def test_a_ros1_leading_slash_is_dropped_from_the_drives_frames():
+    config = load_urdf(wheeled(diff_drive(
+        ROS1_JOINTS, '<odometryFrame>/odom</odometryFrame>',
+        '<robotBaseFrame>/base_footprint</robotBaseFrame>'))).diff_drive
+    assert (config.odometry_frame, config.robot_base_frame) == ('odom', 'base_footprint')
 
 
 def test_driven_joints_lose_their_friction_and_keep_damping_and_the_torque_limit():

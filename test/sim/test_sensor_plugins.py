@@ -297,6 +297,28 @@ def refusal_of(path, old, new):
     ('<min_angle>-1.5707963</min_angle>', '<min_angle>2</min_angle>',
      "sensor 'front_laser' <ray/scan/horizontal/min_angle> 2 is above its <max_angle> "
      '1.5708'),
+    ('<min_angle>-1.5707963</min_angle>', '<min_angle>-1e308</min_angle>',
+     "sensor 'front_laser' <ray/scan/horizontal/min_angle> must be within one turn "
+     '(+-6.2832 rad): -1e+308'),
+    ('<max_angle>1.5707963</max_angle>', '<max_angle>1e308</max_angle>',
+     "sensor 'front_laser' <ray/scan/horizontal/max_angle> must be within one turn "
+     '(+-6.2832 rad): 1e+308'),
+    ('<max_angle>1.5707963</max_angle>', '<max_angle>6</max_angle>',
+     "sensor 'front_laser' <ray/scan/horizontal/min_angle> -1.5708 and <max_angle> 6 must be "
+     'at most one turn (6.2832 rad) apart: 7.5708 rad'),
+    ('<samples>181</samples>', '<samples>1000000000</samples>',
+     "sensor 'front_laser' <ray/scan/horizontal/samples> 1000000000 times <resolution> 1 "
+     'must give at most 100000 readings per scan'),
+    ('<update_rate>10</update_rate>', '<update_rate>1e9</update_rate>',
+     "sensor 'front_laser' <update_rate> must be at most 10000 Hz: 1e+09"),
+    ('<update_rate>10</update_rate>', '<update_rate>-5</update_rate>',
+     "sensor 'front_laser' <update_rate> must be a number of at least 0: '-5'"),
+    ('<frame_name>laser_frame</frame_name>', '<frame_name>//a//b//</frame_name>',
+     "plugin 'front_laser' <frame_name> '//a//b//' is not a valid frame id: it has an empty "
+     "part (a doubled, leading or trailing '/')"),
+    ('<frame_name>laser_frame</frame_name>', '<frame_name>laser frame</frame_name>',
+     "plugin 'front_laser' <frame_name> 'laser frame' is not a valid frame id: it holds "
+     'whitespace or control characters'),
     ('<min>0.05</min>', '<min>-1</min>',
      "sensor 'front_laser' <ray/range/min> must be a number of at least 0: '-1'"),
     ('<max>5.0</max>', '<max>0.01</max>',
@@ -344,6 +366,10 @@ def test_bad_camera_blocks_are_refused(old, new, message):
      "IMU plugin 'imu_ros1' <bodyName> 'base_foot' is not a link of the robot"),
     ('<bodyName>base_footprint</bodyName>', '',
      "IMU plugin 'imu_ros1' has no <bodyName>"),
+    ('<updateRate>50.0</updateRate>', '<updateRate>1e308</updateRate>',
+     "IMU plugin 'imu_ros1' <updateRate> must be at most 10000 Hz: 1e+308"),
+    ('<frame_name>imu_link</frame_name>', '<frame_name>/</frame_name>',
+     "plugin 'imu_ros2' <frame_name> must name a frame: '/'"),
     ('<gaussianNoise>0.0</gaussianNoise>', '<gaussianNoise>-1</gaussianNoise>',
      "IMU plugin 'imu_ros1' <gaussianNoise> must be one number of at least 0: '-1'"),
     ('<stddev>0.0</stddev>', '<stddev>inf</stddev>',

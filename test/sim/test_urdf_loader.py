@@ -2,6 +2,7 @@
 
 import math
 import os
+import re
 
 import mujoco
 import numpy as np
@@ -316,6 +317,29 @@ def test_mesh_paths_that_are_refused(tmp_path, filename, message):
                   package_resolver=shares.__getitem__)
 
 
+@pytest.mark.parametrize('scale, message', [
+    ('1e20', "link 'base' mesh 'tetra.obj' scaled by [1e+20, 1e+20, 1e+20] is 1e+19 m across, "
+     'more than the limit of 1000 m'),
+    ('1 1 1e5', "link 'base' mesh 'tetra.obj' scaled by [1.0, 1.0, 100000.0] is 10000 m "
+     'across, more than the limit of 1000 m'),
+    ('1 0 1', "link 'base' mesh scale must be finite and non-zero: [1.0, 0.0, 1.0]"),
+])
+def test_a_mesh_scaled_beyond_the_worlds_reach_is_refused(tmp_path, scale, message):
+    write_mesh(tmp_path / 'tetra.obj')
+    urdf = robot(link('base', f'<collision><geometry><mesh filename="tetra.obj" '
+                              f'scale="{scale}"/></geometry></collision>'))
+    with pytest.raises(UrdfError) as refusal:
+        load_urdf(urdf, base_dir=str(tmp_path))
+    assert str(refusal.value) == message
+
+
+def test_a_mirrored_mesh_less_than_a_kilometre_across_is_taken(tmp_path):
+    write_mesh(tmp_path / 'tetra.obj')
+    urdf = robot(link('base', '<collision><geometry><mesh filename="tetra.obj" '
+                              'scale="-9000 9000 9000"/></geometry></collision>'))
+    assert compiled(load_urdf(urdf, base_dir=str(tmp_path))).nmesh == 1
+
+
 @pytest.mark.parametrize('filename, reason', [
     ('package://unknown_pkg/m.obj', "package 'unknown_pkg' is not found"),
     ('meshes/missing.obj', 'no such file'),
@@ -417,6 +441,21 @@ NAN_ORIGIN = '<origin xyz="0 nan 0"/>'
      r"link 'a' <origin xyz> contains NaN or infinity"),
     (robot(link('a', '<visual><geometry><box size="1 0 1"/></geometry></visual>')),
      'must be 3 positive numbers'),
+    (robot(link('a', '<visual><geometry><box size="1 2000 1"/></geometry></visual>')),
+     re.escape("link 'a' box size [1.0, 2000.0, 1.0]: the shape is 2000 m across, more than "
+               'the limit of 1000 m')),
+    (robot(link('a', '<collision><geometry><cylinder radius="501" length="1"/></geometry>'
+                     '</collision>')),
+     re.escape("link 'a' cylinder radius and length [501.0, 1.0]: the shape is 1002 m "
+               'across, more than the limit of 1000 m')),
+    (robot(link('a', '<collision><geometry><cylinder radius="1" length="1e300"/></geometry>'
+                     '</collision>')),
+     re.escape("link 'a' cylinder radius and length [1.0, 1e+300]: the shape is 1e+300 m "
+               'across')),
+    (robot(link('a', '<visual><geometry><sphere radius="1e6"/></geometry></visual>')),
+     re.escape("link 'a' sphere radius [1000000.0]: the shape is 2e+06 m across")),
+    (robot(link('a', '<visual><geometry><sphere radius="-1"/></geometry></visual>')),
+     re.escape("link 'a' sphere radius must be 1 positive numbers: [-1.0]")),
     (robot(link('a'), link('b'), joint('j', 'a', 'b', 'revolute',
                                        '<limit lower="1" upper="-1" effort="1" velocity="1"/>')),
      'is not below upper'),

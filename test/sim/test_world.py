@@ -456,8 +456,9 @@ def block_robot(mass, size):
 @pytest.mark.parametrize('label, urdf', [
     # No step of a 1e300 kg block can be computed, even at rest.
     ('heavy', block_robot('1e300', '0.1')),
-    # A block ten thousand kilometres wide swallows tinybot and the floor.
-    ('huge', block_robot('1', '1e7')),
+    # A block a kilometre wide, the largest shape the world takes, swallows tinybot and the
+    # floor.
+    ('huge', block_robot('1', '1000')),
 ])
 def test_robot_unstable_at_its_spawn_pose_is_removed_and_the_others_go_on(label, urdf, caplog):
     plain, broken = World(), World()
@@ -469,7 +470,11 @@ def test_robot_unstable_at_its_spawn_pose_is_removed_and_the_others_go_on(label,
         caplog.clear()  # the spawns' INFO lines are kept where the root logs INFO (launch)
         drive([plain, broken], 0.2, 0.4, 0.3)
     assert broken.model_names() == ['tinybot']
-    assert broken.take_removed_models() == ['block'] and broken.take_removed_models() == []
+    (removal,) = broken.take_removed_models()
+    assert broken.take_removed_models() == []
+    assert (removal.name, removal.reason) == (
+        'block', 'became unstable again after it was put back at its spawn pose')
+    assert 0.2 - 1e-9 <= removal.time <= broken.time  # after its spawn, before now
     messages = [record.getMessage() for record in caplog.records
                 if record.name == 'service_tutorial.world' and 'MuJoCo' not in record.message]
     assert messages == [

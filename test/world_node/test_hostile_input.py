@@ -18,10 +18,14 @@ from geometry_msgs.msg import Pose, Twist
 from nav_msgs.msg import Odometry
 import pytest
 from rclpy.parameter import Parameter
-from repository import read_model, ROOT
-from service_tutorial.conversions import fill_pose_msg, fill_twist_msg, yaw_of
+from repository import read_model, ROOT, TEST_MODELS
+from service_tutorial.conversions import fill_pose_msg, fill_twist_msg, seconds_of, yaw_of
 from service_tutorial.lesson.robot_turning_server import RobotTurningServer
 from service_tutorial.sim.plugins.diff_drive import MAX_WHEEL_RIM_SPEED
+from service_tutorial.world_node.node import REMOVED_MODELS_QOS
+from simulation_interfaces.msg import Result
+from simulation_interfaces.srv import GetEntities
+from srv_interfaces.msg import RemovedModel
 from srv_interfaces.srv import ControlTurningMessage, DeleteModel, GetModelState, SetModelState
 
 pytestmark = pytest.mark.ros
@@ -78,6 +82,21 @@ ENTITY_BOMB = ('<!DOCTYPE robot [<!ENTITY a0 "lol">' + ''.join(
 # One token: the world's checks pass it, the middleware's limit (247 characters) does not.
 LONG_TOPIC = 's' * 250
 TWENTY_MEGABYTES = robot(link('a'), '<!--' + 'x' * (20 * 1024 * 1024) + '-->')
+
+
+def tinybot_with(old, new):
+    """Return tinybot's URDF with one piece replaced."""
+    urdf = read_model('tinybot')
+    assert old in urdf
+    return urdf.replace(old, new)
+
+
+def diffbot_with(old, new):
+    """Return the ROS 1 diff-drive test robot's URDF with one piece replaced."""
+    urdf = read_model('diffbot_ros1', TEST_MODELS)
+    assert old in urdf
+    return urdf.replace(old, new)
+
 
 # (case id, model_name, model_xml, initial pose, reference_frame, robot_namespace,
 #  the status_message the caller gets, after 'SpawnModel: ')
@@ -138,6 +157,55 @@ BAD_SPAWNS = [
     ('NaN in an origin', 'newcomer',
      robot(link('a'), link('b'), joint('j', 'a', 'b', extra='<origin xyz="0 nan 0"/>')),
      pose(), '', '', "joint 'j' <origin xyz> contains NaN or infinity: '0 nan 0'"),
+    ('box two kilometres wide', 'newcomer',
+     robot(link('a', body='<collision><geometry><box size="2000 0.2 0.2"/></geometry>'
+                          '</collision>')), pose(), '', '',
+     "link 'a' box size [2000.0, 0.2, 0.2]: the shape is 2000 m across, more than the limit "
+     'of 1000 m'),
+    ('cylinder of radius 1e300', 'newcomer',
+     robot(link('a', body='<visual><geometry><cylinder radius="1e300" length="1"/></geometry>'
+                          '</visual>')), pose(), '', '',
+     "link 'a' cylinder radius and length [1e+300, 1.0]: the shape is 2e+300 m across, more "
+     'than the limit of 1000 m'),
+    ('laser angles of -1e308 and 1e308', 'newcomer',
+     tinybot_with('<min_angle>-3.1415927</min_angle>\n            <max_angle>3.1241394',
+                  '<min_angle>-1e308</min_angle>\n            <max_angle>1e308'), pose(), '', '',
+     "sensor 'laser' <ray/scan/horizontal/min_angle> must be within one turn (+-6.2832 rad): "
+     '-1e+308'),
+    ('laser scan wider than a turn', 'newcomer',
+     tinybot_with('<min_angle>-3.1415927</min_angle>', '<min_angle>-4</min_angle>'), pose(), '',
+     '', "sensor 'laser' <ray/scan/horizontal/min_angle> -4 and <max_angle> 3.12414 must be at "
+     'most one turn (6.2832 rad) apart: 7.12414 rad'),
+    ('laser of a billion samples', 'newcomer',
+     tinybot_with('<samples>360</samples>', '<samples>1000000000</samples>'), pose(), '', '',
+     "sensor 'laser' <ray/scan/horizontal/samples> 1000000000 times <resolution> 1 must give "
+     'at most 100000 readings per scan'),
+    ('sensor update rate of 1e9 Hz', 'newcomer',
+     tinybot_with('<update_rate>5</update_rate>', '<update_rate>1e9</update_rate>'), pose(), '',
+     '', "sensor 'laser' <update_rate> must be at most 10000 Hz: 1e+09"),
+    ('infinite sensor update rate', 'newcomer',
+     tinybot_with('<update_rate>5</update_rate>', '<update_rate>inf</update_rate>'), pose(), '',
+     '', "sensor 'laser' <update_rate> contains NaN or infinity: 'inf'"),
+    ('camera field of view of pi', 'newcomer',
+     tinybot_with('<horizontal_fov>1.3962634</horizontal_fov>',
+                  '<horizontal_fov>3.1415927</horizontal_fov>'), pose(), '', '',
+     "sensor 'camera' <camera/horizontal_fov> must be below pi for a pinhole camera: 3.14159"),
+    ('negative drive update rate', 'newcomer',
+     diffbot_with('<updateRate>20</updateRate>', '<updateRate>-20</updateRate>'), pose(), '',
+     '', "diff-drive <updateRate> must be one number >= 0: '-20'"),
+    ('drive update rate of 1e308 Hz', 'newcomer',
+     diffbot_with('<updateRate>20</updateRate>', '<updateRate>1e308</updateRate>'), pose(),
+     '', '', 'diff-drive <updateRate> must be at most 10000 Hz: 1e+308'),
+    ('robotBaseFrame //a//b//', 'newcomer',
+     diffbot_with('<robotBaseFrame>base_footprint', '<robotBaseFrame>//a//b//'), pose(), '',
+     '', "diff-drive <robotBaseFrame> '//a//b//' is not a valid frame id: it has an empty part "
+     "(a doubled, leading or trailing '/')"),
+    ('laser frame_name with a space', 'newcomer',
+     tinybot_with('<output_type>sensor_msgs/LaserScan</output_type>',
+                  '<output_type>sensor_msgs/LaserScan</output_type>'
+                  '<frame_name>laser link</frame_name>'), pose(), '', '',
+     "plugin 'laser' <frame_name> 'laser link' is not a valid frame id: it holds whitespace "
+     'or control characters'),
     ('20 MB model_xml', 'newcomer', TWENTY_MEGABYTES, pose(), '', '',
      f'model_xml is {len(TWENTY_MEGABYTES)} bytes, more than the limit of 10485760'),
     ('external entity', 'newcomer',
@@ -282,6 +350,26 @@ class TestRefusals:
         assert (f"model 'newcomer': mesh '{filename}' cannot be had, so it is left out: "
                 f'{reason}') in caplog.text
         assert untouched.delete('newcomer').success
+
+    def test_mesh_scaled_beyond_the_worlds_reach_is_refused(self, untouched, tmp_path,
+                                                            monkeypatch):
+        prefix = tmp_path / 'prefix'
+        index = prefix / 'share' / 'ament_index' / 'resource_index' / 'packages'
+        index.mkdir(parents=True)
+        (index / 'big_meshes').touch()
+        (prefix / 'share' / 'big_meshes').mkdir()
+        # A tetrahedron one metre along each axis.
+        (prefix / 'share' / 'big_meshes' / 'tetra.obj').write_text(
+            'v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n')
+        monkeypatch.setenv('AMENT_PREFIX_PATH',
+                           f'{prefix}{os.pathsep}{os.environ["AMENT_PREFIX_PATH"]}')
+        xml = robot(link('a', body='<collision><geometry><mesh filename="package://big_meshes/'
+                                   'tetra.obj" scale="1e20 1e20 1e20"/></geometry></collision>'))
+        response = untouched.spawn('m0', xml, pose())
+        assert not response.success
+        assert response.status_message == (
+            "SpawnModel: link 'a' mesh 'package://big_meshes/tetra.obj' scaled by "
+            '[1e+20, 1e+20, 1e+20] is 1e+20 m across, more than the limit of 1000 m')
 
     def test_non_unit_quaternion_is_normalised_and_the_spawn_succeeds(self, untouched):
         response = untouched.spawn('turned', read_model('r2d2'), pose(x=2.0, w=0.0, qz=4.0))
@@ -483,6 +571,18 @@ def test_a_model_that_cannot_be_simulated_is_removed_and_the_world_goes_on(ros, 
     topics = world.topics()
     assert {'/sound/odom', '/sound/joint_states', '/sound/cmd_vel'} <= topics
     assert not [topic for topic in topics if topic.startswith('/monolith/')]
+    # The removal is announced, to a tool that starts listening afterwards too.
+    announced = []
+    ros.client_node.create_subscription(RemovedModel, '/mujoco/removed_models',
+                                        announced.append, REMOVED_MODELS_QOS)
+    assert ros.wait_for(lambda: announced, timeout=10.0), 'no message on /mujoco/removed_models'
+    assert [(msg.model_name, msg.reason) for msg in announced] == [
+        ('monolith', 'became unstable again after it was put back at its spawn pose')]
+    assert 0.2 <= seconds_of(announced[0].stamp) <= world.now()
+    # The standard interfaces no longer list it.
+    listed = world.call(GetEntities, '/get_entities', GetEntities.Request())
+    assert listed.result.result == Result.RESULT_OK, listed.result.error_message
+    assert list(listed.entities) == ['tinybot', 'sound']
     # Nothing of it is left behind: the name is free again.
     assert world.spawn('monolith', read_model('r2d2'), pose(x=2.0)).success
 

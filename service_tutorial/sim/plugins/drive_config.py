@@ -10,6 +10,9 @@ values gazebo_ros would have warned about and replaced by its default.
 
 from dataclasses import dataclass
 
+from service_tutorial.sim.description import check_update_rate
+from service_tutorial.sim.description import frame_id
+from service_tutorial.sim.description import MAX_SIZE
 from service_tutorial.sim.description import parse_numbers
 from service_tutorial.sim.description import UrdfError
 from service_tutorial.sim.validation import quoted
@@ -149,6 +152,23 @@ class _Reader:
             raise UrdfError(f'{what} must be one number {bound} 0: {quoted(text)}')
         return value[0]
 
+    def length(self, tag, default, *, text=None):
+        """Return a length tag's value in metres: > 0 and at most MAX_SIZE."""
+        value = self.number(tag, default, text=text)
+        if value > MAX_SIZE:
+            raise UrdfError(f'{self.title} <{tag}> must be at most {MAX_SIZE:g} m: {value:g}')
+        return value
+
+    def rate(self, tag, default):
+        """Return a rate tag's value in Hz: >= 0 and at most MAX_UPDATE_RATE."""
+        return check_update_rate(self.number(tag, default, positive=False),
+                                 f'{self.title} <{tag}>')
+
+    def frame(self, tag, default):
+        """Return a frame tag's value as tf2 takes it (see description.frame_id)."""
+        text = self.block.text(tag)
+        return frame_id(text, f'{self.title} <{tag}>') if text else default
+
     def flag(self, tag, default, *, strict=False):
         """
         Return a true/false tag's value.
@@ -244,7 +264,7 @@ def _read_ros2_diff_drive(block, robot):
         if len(texts) > pairs:
             reader.notes.append(f'diff-drive gives {len(texts)} <{tag}> for {pairs} wheel '
                                 'pairs; the extra ones are ignored, as gazebo_ros does')
-        values = [reader.number(tag, default, text=text) for text in texts[:pairs]]
+        values = [reader.length(tag, default, text=text) for text in texts[:pairs]]
         per_pair[tag] = tuple(values + [default] * (pairs - len(values)))
     return DiffDriveConfig(
         left_joints=left, right_joints=right,
@@ -254,8 +274,8 @@ def _read_ros2_diff_drive(block, robot):
         pair_diameters=per_pair['wheel_diameter'],
         max_wheel_torque=reader.number('max_wheel_torque', 5.0),
         max_wheel_acceleration=reader.number('max_wheel_acceleration', 0.0, positive=False),
-        odometry_frame=reader.text('odometry_frame', 'odom'),
-        robot_base_frame=reader.text('robot_base_frame', 'base_footprint'),
+        odometry_frame=reader.frame('odometry_frame', 'odom'),
+        robot_base_frame=reader.frame('robot_base_frame', 'base_footprint'),
         odometry_source=_odometry_source(
             reader, 'odometry_source', {'0': ODOMETRY_SOURCE_ENCODER, '1': ODOMETRY_SOURCE_WORLD},
             ('encoder', 'world')),
@@ -263,7 +283,7 @@ def _read_ros2_diff_drive(block, robot):
         publish_odom_tf=reader.flag('publish_odom_tf', False),
         publish_wheel_tf=reader.flag('publish_wheel_tf', False),
         publish_wheel_joint_state=False,
-        update_rate=reader.number('update_rate', 100.0, positive=False),
+        update_rate=reader.rate('update_rate', 100.0),
         covariance=reader.covariance((1e-5, 1e-5, 1e-3)),
         notes=tuple(reader.notes))
 
@@ -282,12 +302,12 @@ def _read_ros1_diff_drive(block, robot):
                             'wheel torque limit is <wheelTorque>; its default 5 N m is used')
     return DiffDriveConfig(
         left_joints=left, right_joints=right,
-        wheel_separation=reader.number('wheelSeparation', 0.34),
-        wheel_diameter=reader.number('wheelDiameter', 0.15),
+        wheel_separation=reader.length('wheelSeparation', 0.34),
+        wheel_diameter=reader.length('wheelDiameter', 0.15),
         max_wheel_torque=reader.number('wheelTorque', 5.0),
         max_wheel_acceleration=reader.number('wheelAcceleration', 0.0, positive=False),
-        odometry_frame=reader.text('odometryFrame', 'odom'),
-        robot_base_frame=reader.text('robotBaseFrame', 'base_footprint'),
+        odometry_frame=reader.frame('odometryFrame', 'odom'),
+        robot_base_frame=reader.frame('robotBaseFrame', 'base_footprint'),
         odometry_source=_odometry_source(
             reader, 'odometrySource',
             {'encoder': ODOMETRY_SOURCE_ENCODER, 'world': ODOMETRY_SOURCE_WORLD}, ('0', '1')),
@@ -295,7 +315,7 @@ def _read_ros1_diff_drive(block, robot):
         publish_odom_tf=reader.flag('publishOdomTF', True, strict=True),
         publish_wheel_tf=reader.flag('publishWheelTF', False, strict=True),
         publish_wheel_joint_state=reader.flag('publishWheelJointState', False, strict=True),
-        update_rate=reader.number('updateRate', 100.0, positive=False),
+        update_rate=reader.rate('updateRate', 100.0),
         # ROS 1's diff drive reports a fixed pose covariance and no twist covariance.
         covariance=planar_covariance(1e-5, 1e-5, 1e-3) + (0.0,) * 6,
         legacy_mode=legacy_mode,
@@ -313,14 +333,14 @@ def read_skid_steer(block, robot):
          reader.text('rightRearJoint', 'right_rear_joint')), 'skid-steer')
     return DiffDriveConfig(
         left_joints=left, right_joints=right,
-        wheel_separation=reader.number('wheelSeparation', 0.4),
-        wheel_diameter=reader.number('wheelDiameter', 0.15),
+        wheel_separation=reader.length('wheelSeparation', 0.4),
+        wheel_diameter=reader.length('wheelDiameter', 0.15),
         max_wheel_torque=reader.number('torque', 5.0),
-        odometry_frame=reader.text('odometryFrame', 'odom'),
-        robot_base_frame=reader.text('robotBaseFrame', 'base_footprint'),
+        odometry_frame=reader.frame('odometryFrame', 'odom'),
+        robot_base_frame=reader.frame('robotBaseFrame', 'base_footprint'),
         odometry_source=ODOMETRY_SOURCE_WORLD,
         publish_odom=True,
         publish_odom_tf=reader.flag('broadcastTF', False),
-        update_rate=reader.number('updateRate', 100.0, positive=False),
+        update_rate=reader.rate('updateRate', 100.0),
         covariance=reader.covariance((1e-4, 1e-4, 1e-2)),
         notes=tuple(reader.notes))

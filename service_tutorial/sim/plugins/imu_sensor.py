@@ -15,8 +15,10 @@ from dataclasses import dataclass
 
 import mujoco
 import numpy as np
+from service_tutorial.sim.description import check_update_rate
 from service_tutorial.sim.description import parse_numbers
 from service_tutorial.sim.description import UrdfError
+from service_tutorial.sim.plugins.sensor import check_frame_names
 from service_tutorial.sim.plugins.sensor import gaussian_noise
 from service_tutorial.sim.plugins.sensor import Sensor
 from service_tutorial.sim.plugins.sensor import sensor_of
@@ -77,6 +79,7 @@ def _ros1_config(block, robot):
         raise UrdfError(f'{where} has no <bodyName>')
     if link not in {robot_link.name for robot_link in robot.links}:
         raise UrdfError(f'{where} <bodyName> {quoted(link)} is not a link of the robot')
+    check_frame_names(block)
     sigma = _number(block, 'gaussianNoise', 0.0)
     offset = _vector(block, 'xyzOffset')
     rpy = _vector(block, 'rpyOffset')  # the lesson's <rpyOffsets> is not read, as in ROS 1
@@ -84,7 +87,9 @@ def _ros1_config(block, robot):
     mujoco.mju_euler2Quat(orientation, np.array(rpy), 'XYZ')
     return ImuConfig(
         name=block.name, link=link, position=offset,
-        orientation=tuple(orientation.tolist()), update_rate=_number(block, 'updateRate', 0.0),
+        orientation=tuple(orientation.tolist()),
+        update_rate=check_update_rate(_number(block, 'updateRate', 0.0),
+                                      f'{where} <updateRate>'),
         angular_velocity_noise=((0.0, sigma),) * 3,
         linear_acceleration_noise=((0.0, sigma),) * 3, orientation_variance=sigma ** 2)
 

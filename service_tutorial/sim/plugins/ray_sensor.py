@@ -30,6 +30,13 @@ SCAN = 'ray/scan/horizontal/'
 # The rays see the floor and scenery of MJCF files (group 0) and every URDF collision shape;
 # the robot's own geoms are moved to HIDDEN_GROUP for the length of the cast.
 HIDDEN_GROUP = 5
+# A scan's beams lie within one turn: each angle within FULL_TURN of the sensor's x axis, and
+# the last at most FULL_TURN from the first. ANGLE_ROUNDING lets in +-pi written to three
+# decimals (-3.142 to 3.142), as robot files often write a full scan.
+FULL_TURN = 2.0 * math.pi
+ANGLE_ROUNDING = 1e-3
+# The most readings a scan may have (samples x resolution); real lasers give a few thousand.
+MAX_SCAN_READINGS = 100000
 RAY_GEOM_GROUPS = np.array([int(group in (0, COLLISION_GROUP)) for group in range(6)],
                            dtype=np.uint8)
 
@@ -65,11 +72,20 @@ def read_config(block):
     sensor = sensor_of(block, ('ray', 'gpu_ray'), 'laser')
     samples = sensor.number(SCAN + 'samples', 640, above=0, whole=True)
     resolution = sensor.number(SCAN + 'resolution', 1.0, above=0.0)
-    angle_min = sensor.number(SCAN + 'min_angle', 0.0)
-    angle_max = sensor.number(SCAN + 'max_angle', 0.0)
+    if round(min(samples * resolution, MAX_SCAN_READINGS + 1)) > MAX_SCAN_READINGS:
+        raise UrdfError(f'sensor {quoted(sensor.name)} <{SCAN}samples> {samples} times '
+                        f'<resolution> {resolution:g} must give at most {MAX_SCAN_READINGS} '
+                        'readings per scan')
+    # Gazebo reports samples x resolution readings; these are cast, not interpolated.
+    readings = max(1, round(samples * resolution))
+    angle_min, angle_max = (scan_angle(sensor, tag) for tag in ('min_angle', 'max_angle'))
     if angle_min > angle_max:
         raise UrdfError(f'sensor {quoted(sensor.name)} <{SCAN}min_angle> {angle_min:g} is '
                         f'above its <max_angle> {angle_max:g}')
+    if angle_max - angle_min > FULL_TURN + ANGLE_ROUNDING:
+        raise UrdfError(f'sensor {quoted(sensor.name)} <{SCAN}min_angle> {angle_min:g} and '
+                        f'<max_angle> {angle_max:g} must be at most one turn '
+                        f'({FULL_TURN:.4f} rad) apart: {angle_max - angle_min:g} rad')
     range_min = sensor.number('ray/range/min', 0.0, minimum=0.0)
     range_max = sensor.number('ray/range/max', None, above=range_min)
     if range_max is None:
@@ -81,10 +97,17 @@ def read_config(block):
     return RayConfig(
         name=sensor.name, link=sensor.link, position=sensor.position,
         orientation=sensor.orientation, update_rate=sensor.update_rate,
-        # Gazebo reports samples x resolution readings; these are cast, not interpolated.
-        samples=max(1, round(samples * resolution)), angle_min=angle_min,
-        angle_max=angle_max, range_min=range_min, range_max=range_max, noise_mean=mean,
-        noise_stddev=stddev)
+        samples=readings, angle_min=angle_min, angle_max=angle_max, range_min=range_min,
+        range_max=range_max, noise_mean=mean, noise_stddev=stddev)
+
+
+def scan_angle(sensor, tag):
+    """Return a scan's <min_angle> or <max_angle> in rad, refusing one beyond a full turn."""
+    angle = sensor.number(SCAN + tag, 0.0)
+    if abs(angle) > FULL_TURN + ANGLE_ROUNDING:
+        raise UrdfError(f'sensor {quoted(sensor.name)} <{SCAN}{tag}> must be within one turn '
+                        f'(+-{FULL_TURN:.4f} rad): {angle:g}')
+    return angle
 
 
 class RaySensor(Sensor):

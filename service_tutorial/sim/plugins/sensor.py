@@ -15,12 +15,15 @@ import zlib
 
 import mujoco
 import numpy as np
+from service_tutorial.sim.description import frame_id
 from service_tutorial.sim.description import UrdfError
 from service_tutorial.sim.plugins import Plugin
 from service_tutorial.sim.validation import quoted
 
 # Sites of sensors go in a geom group that the renderer does not draw (it draws 0 to 2).
 SENSOR_SITE_GROUP = 5
+# The tags that name the frame of a sensor's messages: ROS 1's and ROS 2's gazebo_ros.
+FRAME_TAGS = ('frameName', 'frame_name')
 
 
 @dataclass(frozen=True)
@@ -52,7 +55,16 @@ def sensor_of(block, types, title):
     if not sensor.name:
         raise UrdfError(f'the <sensor type="{sensor.sensor_type}"> on link {quoted(sensor.link)} '
                         'has no name')
+    check_frame_names(block)
     return sensor
+
+
+def check_frame_names(block):
+    """Refuse a sensor plugin whose frameName or frame_name tf2 could not take (frame_id)."""
+    for tag in FRAME_TAGS:
+        text = block.text(tag)
+        if text:  # an empty one means the sensor's link, as if it were not there
+            frame_id(text, f'plugin {quoted(block.name)} <{tag}>')
 
 
 def gaussian_noise(sensor, path):

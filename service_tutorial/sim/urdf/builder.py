@@ -15,7 +15,7 @@ import mujoco
 import numpy as np
 from service_tutorial.sim import frames
 from service_tutorial.sim import plugins
-from service_tutorial.sim.description import COLLISION_GROUP, VISUAL_GROUP
+from service_tutorial.sim.description import COLLISION_GROUP, MAX_SIZE, VISUAL_GROUP
 from service_tutorial.sim.description import parse_numbers
 from service_tutorial.sim.description import UrdfError
 from service_tutorial.sim.urdf.gazebo import gazebo_colour
@@ -436,17 +436,17 @@ class _SpecBuilder:
         geom = body.add_geom(pos=position, quat=orientation)
         if geometry.box is not None:
             size = np.asarray(geometry.box.size, dtype=float)
-            self._check_size(size, 3, f'{what} box size')
+            self._check_size(size, 3, f'{what} box size', across=(1.0, 1.0, 1.0))
             geom.type = mujoco.mjtGeom.mjGEOM_BOX
             geom.size = size / 2.0
         elif geometry.cylinder is not None:
             size = np.array([geometry.cylinder.radius, geometry.cylinder.length], float)
-            self._check_size(size, 2, f'{what} cylinder radius and length')
+            self._check_size(size, 2, f'{what} cylinder radius and length', across=(2.0, 1.0))
             geom.type = mujoco.mjtGeom.mjGEOM_CYLINDER
             geom.size = [size[0], size[1] / 2.0, 0.0]
         elif geometry.sphere is not None:
             size = np.array([geometry.sphere.radius], float)
-            self._check_size(size, 1, f'{what} sphere radius')
+            self._check_size(size, 1, f'{what} sphere radius', across=(2.0,))
             geom.type = mujoco.mjtGeom.mjGEOM_SPHERE
             geom.size = [size[0], 0.0, 0.0]
         elif mesh_name is not None:
@@ -457,9 +457,14 @@ class _SpecBuilder:
         return geom
 
     @staticmethod
-    def _check_size(size, count, what):
+    def _check_size(size, count, what, across):
+        """Refuse a shape's size that is not positive, or whose extents exceed MAX_SIZE."""
         if size.shape != (count,) or not np.all(np.isfinite(size)) or np.any(size <= 0.0):
             raise UrdfError(f'{what} must be {count} positive numbers: {size.tolist()}')
+        extent = float(np.max(size * across))
+        if extent > MAX_SIZE:
+            raise UrdfError(f'{what} {size.tolist()}: the shape is {extent:g} m across, more '
+                            f'than the limit of {MAX_SIZE:g} m')
 
     def _visual_rgba(self, visual, link_name):
         material = visual.material

@@ -13,6 +13,7 @@ import types
 
 import mujoco
 import numpy as np
+from service_tutorial.sim.description import check_update_rate
 from service_tutorial.sim.description import parse_numbers
 from service_tutorial.sim.description import UrdfError
 from service_tutorial.sim.validation import quoted
@@ -207,7 +208,8 @@ def _sensor_block(element, link):
     mujoco.mju_euler2Quat(orientation, np.array(pose[3:]), 'XYZ')  # URDF's and SDF's rpy
     return SensorBlock(
         link=link, sensor_type=(element.get('type') or '').strip(), name=name,
-        update_rate=_number(name, values, 'update_rate', 0.0, minimum=0.0),
+        update_rate=check_update_rate(_number(name, values, 'update_rate', 0.0, minimum=0.0),
+                                      f'sensor {quoted(name)} <update_rate>'),
         position=tuple(pose[:3]), orientation=tuple(orientation.tolist()),
         values=types.MappingProxyType(values))
 

@@ -15,8 +15,10 @@ import warnings
 
 import mujoco
 import numpy as np
+from service_tutorial.sim.description import MAX_SIZE
 from service_tutorial.sim.description import UrdfError
 from service_tutorial.sim.urdf.hardened_xml import parse_xml
+from service_tutorial.sim.validation import quoted
 
 # File extension -> the trimesh file type that decodes it.
 MESH_FORMATS = {'.stl': 'stl', '.dae': 'dae', '.obj': 'obj'}
@@ -52,7 +54,7 @@ class MeshLoader:
         scale = mesh.scale if mesh.scale is not None else 1.0
         scale = np.broadcast_to(np.asarray(scale, dtype=float), (3,)).copy()
         if not np.all(np.isfinite(scale)) or np.any(scale == 0.0):
-            raise UrdfError(f'{what} mesh scale must be finite and non-zero')
+            raise UrdfError(f'{what} mesh scale must be finite and non-zero: {scale.tolist()}')
         try:
             path = resolve_mesh_path(mesh.filename, self._base_dir, self._package_resolver)
             if path not in self._decoded:
@@ -61,6 +63,10 @@ class MeshLoader:
             self.missing.append((mesh.filename, str(missing)))
             return None
         vertices, faces = self._decoded[path]
+        extent = float(np.max(np.ptp(vertices, axis=0).astype(float) * np.abs(scale)))
+        if extent > MAX_SIZE:
+            raise UrdfError(f'{what} mesh {quoted(mesh.filename)} scaled by {scale.tolist()} is '
+                            f'{extent:g} m across, more than the limit of {MAX_SIZE:g} m')
         if collision and _is_flat(vertices * scale):
             self.left_out.append(f"{what} collision mesh '{mesh.filename}' is flat, and MuJoCo "
                                  'collides only with solid shapes: that collision is left out')
