@@ -413,3 +413,19 @@ def test_a_tinybot_moved_during_a_goal_turns_the_rest_from_where_it_was_put(acti
     assert result.angle_turned == pytest.approx(2.0, abs=0.01)
     assert truth.turned == pytest.approx(3.0, abs=0.2)
     told_to_stop_and_still(action_world)
+
+
+def test_a_robot_deleted_during_a_goal_ends_it_once_odometry_has_been_silent(action_world):
+    goal, _ = turning_at_full_speed(action_world, 3.0, 0.5)
+    world = action_world.world
+
+    assert world.delete('tinybot').success
+    deleted_at = world.now()
+
+    status, result = goal.result()
+    assert status == GoalStatus.STATUS_ABORTED
+    assert result.message.startswith('no odometry on /odom for 1.0 s')
+    # Ended by simulation time, one odom_timeout after the last odometry (the upper bound only
+    # leaves room for the result's way back on a busy machine).
+    assert deleted_at + 0.9 < world.now() < deleted_at + 2.0
+    assert action_world.cmd_vel[-1] == Twist()
