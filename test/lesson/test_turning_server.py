@@ -9,6 +9,7 @@ from rclpy.parameter import Parameter
 from service_tutorial.conversions import yaw_of
 from service_tutorial.lesson.robot_turning_server import RobotTurningServer
 from service_tutorial.world_node.pacing import MAX_TICK_SIMULATED
+from simulation_interfaces.srv import ResetSimulation
 from srv_interfaces.srv import ControlTurningMessage
 
 pytestmark = pytest.mark.ros
@@ -155,7 +156,19 @@ def test_a_zero_second_turn_stops_tinybot_and_succeeds(turning_world):
     assert turning_world.heading_at_rest() == pytest.approx(before, abs=1e-4)
 
 
-def reset_during_a_long_turn(turning_world, *queued):
+def lesson_reset(world):
+    """Reset the simulation the lesson's way: time to 0, every model at its spawn pose."""
+    world.empty('reset_simulation')
+
+
+def standard_time_reset(world):
+    """Put only time back through the standard /reset_simulation; models stay where they are."""
+    result = world.call(ResetSimulation, '/reset_simulation', ResetSimulation.Request(
+        scope=ResetSimulation.Request.SCOPE_TIME)).result
+    assert result.result == result.RESULT_OK, result.error_message
+
+
+def reset_during_a_long_turn(turning_world, *queued, reset=lesson_reset):
     """Start a 10 s turn (and queue more), reset the simulation 1 s in; return the futures."""
     ros, world = turning_world.ros, turning_world.world
     turning_world.heading_at_rest()
@@ -164,17 +177,19 @@ def reset_during_a_long_turn(turning_world, *queued):
     more = [turning_world.turn_async(*turn) for turn in queued]
     world.wait_sim(1.0)
     assert not long_turn.done()
-    world.empty('reset_simulation')
+    reset(world)
     # Within a second of wall time from the world's answer to the reset, not ten of sim time.
     assert ros.wait_for(long_turn.done, timeout=1.0), 'no answer within 1 s of the reset'
     return long_turn, more
 
 
+@pytest.mark.parametrize('reset', [lesson_reset, standard_time_reset],
+                         ids=['mujoco-reset_simulation', 'standard-reset-of-time'])
 def test_a_reset_during_a_turn_ends_it_at_once_stops_tinybot_and_turning_goes_on(
-        turning_world, capfd):
+        turning_world, capfd, reset):
     ros, world = turning_world.ros, turning_world.world
 
-    long_turn, _ = reset_during_a_long_turn(turning_world)
+    long_turn, _ = reset_during_a_long_turn(turning_world, reset=reset)
 
     assert not long_turn.result().success
     assert ros.wait_for(lambda: turning_world.cmd_vel[-1] == Twist())
