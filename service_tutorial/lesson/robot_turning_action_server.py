@@ -124,6 +124,9 @@ class RobotTurningActionServer(Node):
         self.heading = None  # the robot's odometry heading, unwrapped, rad
         self.last_odom = None  # the odometry message before this one
         self.last_odom_at = None
+        # After time went back: (stamp beyond which odometry is from before the jump, the time
+        # the clock jumped from), both in s, until odometry from after the jump is heard.
+        self.stale_odom = None
         self.turn = None  # the goal being carried out
         self.turns_to_execute = {}  # accepted goals whose execute callback has not run yet
 
@@ -218,6 +221,14 @@ class RobotTurningActionServer(Node):
 
     def odom_callback(self, msg):
         """Follow the robot's heading and steer (or settle) the turn under way."""
+        if self.stale_odom is not None:
+            newest_fresh, jumped_from = self.stale_odom
+            if seconds_of(msg.header.stamp) > newest_fresh and \
+                    self.get_clock().now().nanoseconds / 1e9 < jumped_from:
+                # Sent before time went back, heard after: closer to the old time than to the
+                # new one. Following it would make the next, fresh message look like a jump.
+                return
+            self.stale_odom = None
         last, self.last_odom = self.last_odom, msg
         yaw = yaw_of(msg.pose.pose.orientation)
         turning = yaw if last is None else math.remainder(
@@ -272,8 +283,12 @@ class RobotTurningActionServer(Node):
         """End the goal under way when simulation time went back; forget older odometry."""
         if jump.delta.nanoseconds >= 0:
             return
-        # What odometry said before the jump belongs to another time: follow it afresh.
+        # What odometry said before the jump belongs to another time: follow it afresh, and
+        # leave out a message from before the jump that is still on its way.
         self.heading = self.last_odom = self.last_odom_at = None
+        now = self.get_clock().now().nanoseconds / 1e9
+        jumped_from = now - jump.delta.nanoseconds / 1e9
+        self.stale_odom = ((now + jumped_from) / 2.0, jumped_from)
         turn = self.turn
         if turn is None:
             return

@@ -8,11 +8,14 @@ import re
 from action_msgs.msg import GoalStatus
 from action_msgs.srv import CancelGoal
 from geometry_msgs.msg import Twist
+from nav_msgs.msg import Odometry
 from programs import program_path
 import pytest
 from rcl_interfaces.srv import DescribeParameters
+from rclpy.clock import ClockChange, TimeJump
+from rclpy.duration import Duration
 from rclpy.parameter import Parameter
-from service_tutorial.conversions import make_pose, seconds_of, yaw_of
+from service_tutorial.conversions import make_pose, seconds_of, time_msg, yaw_of
 from service_tutorial.lesson.model_services import model_path
 from service_tutorial.lesson.robot_turning_action_server import RobotTurningActionServer
 from srv_interfaces.action import TurnRobot
@@ -429,3 +432,32 @@ def test_a_robot_deleted_during_a_goal_ends_it_once_odometry_has_been_silent(act
     # leaves room for the result's way back on a busy machine).
     assert deleted_at + 0.9 < world.now() < deleted_at + 2.0
     assert action_world.cmd_vel[-1] == Twist()
+
+
+def odometry(stamp, yaw):
+    """Return an odometry message of tinybot at rest at the origin, facing yaw."""
+    msg = Odometry()
+    msg.header.stamp = time_msg(stamp)
+    msg.pose.pose = make_pose(0.0, 0.0, 0.0,
+                              quaternion=(0.0, 0.0, math.sin(yaw / 2.0), math.cos(yaw / 2.0)))
+    return msg
+
+
+def test_odometry_sent_before_time_went_back_and_heard_after_is_left_out(rclpy_session):
+    # The order a busy executor may hand them over in: odometry, the jump back (from /clock),
+    # odometry the world sent before its reset, then odometry from after it.
+    server = RobotTurningActionServer(
+        parameter_overrides=[Parameter('use_sim_time', value=True)])
+    try:
+        server.odom_callback(odometry(5.00, 0.3))
+        server.time_jumped(TimeJump(ClockChange.ROS_TIME_NO_CHANGE, Duration(seconds=-5.0)))
+        server.odom_callback(odometry(5.02, 0.31))
+        assert server.heading is None and server.last_odom is None
+
+        server.odom_callback(odometry(0.02, 0.0))
+        server.odom_callback(odometry(0.04, 0.01))
+
+        assert server.heading == pytest.approx(0.01)
+        assert seconds_of(server.last_odom.header.stamp) == pytest.approx(0.04)
+    finally:
+        server.destroy_node()
