@@ -11,6 +11,27 @@ use_sim_time. A cancel stops the robot at once; the goal ends once the robot is 
 the angle it really turned. A goal that arrives during a turn replaces it: the old goal is
 aborted with a message and the new one turns from wherever the robot is. Invalid goals are
 rejected before they start, with the reason in the log.
+
+A goal is steered on odometry and timed in simulation time, so it ends, aborted with a message
+that says why and the robot told to stop, whenever either stops making sense:
+
+- A reset of the simulation puts time back (``simulation time jumped back by 3.21 s (the
+  simulation was reset)``): heard from rclpy through a jump callback on the node's clock, or,
+  whatever the node's clock, from an odometry stamp earlier than the one before it
+  (``odometry time jumped back by ...``). The goal ends at once.
+- A robot moved by someone else (/mujoco/set_model_state, a reset of the world): its heading
+  or position jumps between two odometry messages by more than its own twist explains over
+  their stamps' interval, plus a margin (``the robot was moved: its heading jumped by +1.000
+  rad ...``). The angle turned leaves the jump out. Odometry shows such a jump when it follows
+  the robot's true pose (odometry_source 1), or when it starts again at its origin (a reset of
+  the world). Tinybot's odometry counts its wheels' turns (odometry_source 0), and
+  set_model_state moves the body and leaves the wheels as they were: the server cannot see that
+  move, and the goal turns the rest of its angle from where the robot was put.
+- A robot deleted, or odometry that stops: ``no odometry on /odom for 1.0 s``.
+
+A pause of the physics stops simulation time and odometry's with it: the goal waits, and goes
+on once the physics is unpaused. Time that jumps ahead (a big StepSimulation) only lets the
+feedback timer and the odometry timeout see the time that passed.
 """
 
 from enum import Enum
@@ -20,19 +41,24 @@ from geometry_msgs.msg import Twist
 from nav_msgs.msg import Odometry
 from rcl_interfaces.msg import FloatingPointRange, ParameterDescriptor
 from rclpy.action import ActionServer, CancelResponse, GoalResponse
+from rclpy.clock import JumpThreshold
 from rclpy.duration import Duration
 from rclpy.node import Node
 from rclpy.task import Future
-from service_tutorial.conversions import yaw_of
+from service_tutorial.conversions import seconds_of, yaw_of
 from service_tutorial.lesson.client_main import spin_node
 from service_tutorial.lesson.turning_limits import MAX_ANGLE, MAX_ANGULAR_VEL
 from srv_interfaces.action import TurnRobot
 
-# Ten turns, in rad.
 # Below this yaw rate, in rad/s, the robot counts as at rest after it was told to stop.
 AT_REST = 0.01
 # Longest wait for the robot to come to rest after it was told to stop, in s.
 SETTLE_TIMEOUT = 1.0
+# How much further than its twist explains the robot may turn (rad) or go (m) between two
+# odometry messages before it counts as moved by someone else: well above what a change of
+# speed within one odometry period adds, well below any move made on purpose.
+MOVE_MARGIN_ANGLE = 0.05
+MOVE_MARGIN_DISTANCE = 0.05
 
 
 class Outcome(Enum):
@@ -96,8 +122,11 @@ class RobotTurningActionServer(Node):
             read_only=True, floating_point_range=double_range(0.1, 100.0)))
 
         self.heading = None  # the robot's odometry heading, unwrapped, rad
-        self.last_yaw = None
+        self.last_odom = None  # the odometry message before this one
         self.last_odom_at = None
+        # After time went back: (stamp beyond which odometry is from before the jump, the time
+        # the clock jumped from), both in s, until odometry from after the jump is heard.
+        self.stale_odom = None
         self.turn = None  # the goal being carried out
         self.turns_to_execute = {}  # accepted goals whose execute callback has not run yet
 
@@ -118,6 +147,14 @@ class RobotTurningActionServer(Node):
         self.feedback_timer = self.create_timer(
             1.0 / self.get_parameter('feedback_rate').value, self.feedback_callback,
             autostart=False)
+        # Time going back ends the goal under way (see the module's docstring). rclpy calls
+        # time_jumped from its TimeSource's /clock subscription, right after the new time is
+        # set: an executor callback in the default group, so it never runs beside the others.
+        # The handle is kept: dropping it would remove the callback.
+        self.time_jump_handle = self.get_clock().create_jump_callback(
+            JumpThreshold(min_forward=None, min_backward=Duration(nanoseconds=-1),
+                          on_clock_change=False),
+            post_callback=self.time_jumped)
         self.get_logger().info('==== Robot Turning Action Server Started ====')
 
     # --- goals ---------------------------------------------------------------------------------
@@ -184,23 +221,81 @@ class RobotTurningActionServer(Node):
 
     def odom_callback(self, msg):
         """Follow the robot's heading and steer (or settle) the turn under way."""
+        if self.stale_odom is not None:
+            newest_fresh, jumped_from = self.stale_odom
+            if seconds_of(msg.header.stamp) > newest_fresh and \
+                    self.get_clock().now().nanoseconds / 1e9 < jumped_from:
+                # Sent before time went back, heard after: closer to the old time than to the
+                # new one. Following it would make the next, fresh message look like a jump.
+                return
+            self.stale_odom = None
+        last, self.last_odom = self.last_odom, msg
         yaw = yaw_of(msg.pose.pose.orientation)
-        if self.heading is None:
-            self.heading = yaw
-        else:
-            self.heading += math.remainder(yaw - self.last_yaw, math.tau)
-        self.last_yaw = yaw
+        turning = yaw if last is None else math.remainder(
+            yaw - yaw_of(last.pose.pose.orientation), math.tau)
+        self.heading = turning if self.heading is None else self.heading + turning
         self.last_odom_at = self.get_clock().now()
         turn = self.turn
         if turn is None:
             return
         if turn.start_heading is None:
             self.begin(turn)
+        elif turn.ending is None and last is not None:
+            interruption = self.interruption(last, msg, turning)
+            if interruption is not None:
+                # The jump is not the robot's turning: leave it out of the angle turned.
+                turn.start_heading += turning
+                turn.turned = self.heading - turn.start_heading
+                self.stop(turn, Outcome.ABORTED, interruption)
+                self.finish(turn, *turn.ending)
+                return
         turn.turned = self.heading - turn.start_heading
         if turn.ending is None:
             self.steer(turn)
         elif abs(msg.twist.twist.angular.z) < AT_REST:
             self.finish(turn, *turn.ending)
+
+    @staticmethod
+    def interruption(last, msg, turning):
+        """Say why odometry cannot be followed from last to msg (turning apart), or None."""
+        interval = seconds_of(msg.header.stamp) - seconds_of(last.header.stamp)
+        if interval < 0.0:
+            return (f'odometry time jumped back by {-interval:.2f} s '
+                    '(the simulation was reset)')
+        rate = max(abs(last.twist.twist.angular.z), abs(msg.twist.twist.angular.z))
+        explained = rate * interval + MOVE_MARGIN_ANGLE
+        if abs(turning) > explained:
+            return (f'the robot was moved: its heading jumped by {turning:+.3f} rad in '
+                    f'{interval:.3f} s of odometry, where its turning explains at most '
+                    f'{explained:.3f} rad')
+        before, after = last.pose.pose.position, msg.pose.pose.position
+        shift = math.hypot(after.x - before.x, after.y - before.y)
+        speed = max(math.hypot(twist.linear.x, twist.linear.y)
+                    for twist in (last.twist.twist, msg.twist.twist))
+        explained = speed * interval + MOVE_MARGIN_DISTANCE
+        if shift > explained:
+            return (f'the robot was moved: its position jumped by {shift:.3f} m in '
+                    f'{interval:.3f} s of odometry, where its speed explains at most '
+                    f'{explained:.3f} m')
+        return None
+
+    def time_jumped(self, jump):
+        """End the goal under way when simulation time went back; forget older odometry."""
+        if jump.delta.nanoseconds >= 0:
+            return
+        # What odometry said before the jump belongs to another time: follow it afresh, and
+        # leave out a message from before the jump that is still on its way.
+        self.heading = self.last_odom = self.last_odom_at = None
+        now = self.get_clock().now().nanoseconds / 1e9
+        jumped_from = now - jump.delta.nanoseconds / 1e9
+        self.stale_odom = ((now + jumped_from) / 2.0, jumped_from)
+        turn = self.turn
+        if turn is None:
+            return
+        self.stop(turn, Outcome.ABORTED, f'simulation time jumped back by '
+                                         f'{-jump.delta.nanoseconds / 1e9:.2f} s '
+                                         '(the simulation was reset)')
+        self.finish(turn, *turn.ending)
 
     def begin(self, turn):
         """Take the heading the turn starts from, once odometry has given one."""
@@ -268,6 +363,7 @@ class RobotTurningActionServer(Node):
         """Stop the robot if the node goes away in the middle of a turn."""
         if self.turn is not None and self.context.ok():
             self.cmd_vel_pub.publish(Twist())
+        self.time_jump_handle.unregister()
         self.turn_robot_server.destroy()
         return super().destroy_node()
 

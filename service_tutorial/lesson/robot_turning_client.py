@@ -3,7 +3,9 @@ The lesson's turning client: ask /control_robot_angle to turn tinybot.
 
 Run without arguments it prompts for the duration and the angular velocity, as the ROS 1
 lesson did, and asks again until both are valid. Run as `robot_turning_client 2 0.5` it sends
-the request without prompting, for scripts.
+the request without prompting, for scripts. When the answer is success false (a refused
+request, or a turn that a reset of the simulation cut short) it says so on stderr and exits with
+status 1.
 """
 
 import argparse
@@ -17,6 +19,10 @@ from service_tutorial.lesson.turning_limits import ask_turning_request, given_or
 from service_tutorial.lesson.turning_limits import MAX_ANGULAR_VEL
 from service_tutorial.lesson.turning_limits import parse_pair_or_nothing, parse_turning_request
 from srv_interfaces.srv import ControlTurningMessage
+
+# What success false means; the answer has no room for the reason, the server's log has it.
+NOT_CARRIED_OUT = ('the turn was refused or cut short (a reset of the simulation ends a turn '
+                   "under way); the server's log says why")
 
 
 class RobotTurningClient(Node):
@@ -67,6 +73,8 @@ def main(args=None):
         rclpy.spin_until_future_complete(node, future)
         response = future.result()
         print(response_text(response))
+        if not response.success:
+            print(f'robot_turning_client: {NOT_CARRIED_OUT}', file=sys.stderr)
         return 0 if response.success else 1
     return run_node(RobotTurningClient, turn, args=args)
 

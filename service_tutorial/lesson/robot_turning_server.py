@@ -16,6 +16,8 @@ import math
 from geometry_msgs.msg import Twist
 from rcl_interfaces.msg import ParameterDescriptor
 from rclpy.callback_groups import ReentrantCallbackGroup
+from rclpy.clock import JumpThreshold
+from rclpy.duration import Duration
 from rclpy.node import Node
 from rclpy.task import Future
 from service_tutorial.lesson.client_main import spin_node
@@ -62,6 +64,14 @@ class RobotTurningServer(Node):
         self.publish_timer = self.create_timer(
             1.0 / self.publish_rate, self.publish_callback, autostart=False)
         self.stop_timer = self.create_timer(1.0, self.stop_callback, autostart=False)
+        # Time going back ends the turn under way (see the module's docstring). rclpy calls
+        # time_jumped from its TimeSource's /clock subscription, right after the new time is
+        # set: an executor callback in this node's default group, the timers' group, so it
+        # never runs beside them. The handle is kept: dropping it would remove the callback.
+        self.time_jump_handle = self.get_clock().create_jump_callback(
+            JumpThreshold(min_forward=None, min_backward=Duration(nanoseconds=-1),
+                          on_clock_change=False),
+            post_callback=self.time_jumped)
         self.get_logger().info('==== Robot Turning Server Started ====')
 
     async def control_robot_angle_callback(self, request, response):
@@ -136,11 +146,25 @@ class RobotTurningServer(Node):
         self.get_logger().info(f'Done ... after {elapsed:.3f} s')
         self.finish_turn()
 
-    def finish_turn(self):
+    def time_jumped(self, jump):
+        """End the turn under way when simulation time went back: it cannot be timed now."""
+        if jump.delta.nanoseconds >= 0 or not self.turns or self.turns[0].start is None:
+            return
+        turn = self.turns[0]
+        before_jump = self.get_clock().now().nanoseconds - jump.delta.nanoseconds
+        elapsed = (before_jump - turn.start.nanoseconds) / 1e9
+        self.stop_timer.cancel()
+        self.get_logger().warning(
+            f'simulation time jumped back by {-jump.delta.nanoseconds / 1e9:.2f} s '
+            f'(the simulation was reset): turn of {turn.command.angular.z} rad/s for '
+            f'{turn.time_duration} s ended after {elapsed:.3f} s')
+        self.finish_turn(success=False)
+
+    def finish_turn(self, success=True):
         """Stop the robot, answer the current turn's caller, and start the next turn."""
         self.publish_timer.cancel()
         self.cmd_vel_pub.publish(Twist())
-        self.turns.popleft().done.set_result(True)
+        self.turns.popleft().done.set_result(success)
         if self.turns:
             self.start_turn(self.turns[0])
 
@@ -148,6 +172,7 @@ class RobotTurningServer(Node):
         """Stop the robot if the node goes away in the middle of a turn."""
         if self.turns and self.context.ok():
             self.cmd_vel_pub.publish(Twist())
+        self.time_jump_handle.unregister()
         return super().destroy_node()
 
 

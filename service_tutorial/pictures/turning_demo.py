@@ -225,7 +225,8 @@ def turn_robot(node, time_duration, angular_vel):
     response = future.result()
     say(indent(response_text(response)))
     if not response.success:
-        raise DemoError('the turning server refused the request (its log says why)')
+        raise DemoError('the turning server refused the request or cut the turn short '
+                        '(its log says why)')
     commanded = time_duration * angular_vel
     error = '' if commanded == 0.0 else f', {100.0 * (turned - commanded) / commanded:+.1f} %'
     say(indent(f'commanded {commanded:.3f} rad, tinybot turned {turned:.3f} rad{error}'))

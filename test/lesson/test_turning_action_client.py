@@ -100,3 +100,19 @@ def test_a_reader_that_goes_away_ends_the_client_quietly(action_world, start_pro
     assert client.wait(timeout=30) == 1
 
     assert 'Traceback' not in errors
+
+
+def test_client_prints_why_a_reset_aborted_the_goal(action_world, start_program):
+    client = start_program([CLIENT, '3.0', '0.5'])
+    for line in client.stdout:
+        if progress(line) and progress(line)[0] > 0.2:
+            break
+
+    action_world.world.empty('reset_simulation')
+
+    rest, errors = client.communicate(timeout=10)
+    assert client.returncode == 1, errors
+    assert 'Traceback' not in errors
+    assert re.search(r'^status: ABORTED\nsuccess: False\n', rest, re.M), rest
+    assert re.search(r'^message: "simulation time jumped back by \d+\.\d+ s '
+                     r'\(the simulation was reset\): turned \d', rest, re.M), rest

@@ -2,15 +2,21 @@
 
 import math
 import os
+import pathlib
+import re
 
 from action_msgs.msg import GoalStatus
 from action_msgs.srv import CancelGoal
 from geometry_msgs.msg import Twist
+from nav_msgs.msg import Odometry
 from programs import program_path
 import pytest
 from rcl_interfaces.srv import DescribeParameters
+from rclpy.clock import ClockChange, TimeJump
+from rclpy.duration import Duration
 from rclpy.parameter import Parameter
-from service_tutorial.conversions import seconds_of, yaw_of
+from service_tutorial.conversions import make_pose, seconds_of, time_msg, yaw_of
+from service_tutorial.lesson.model_services import model_path
 from service_tutorial.lesson.robot_turning_action_server import RobotTurningActionServer
 from srv_interfaces.action import TurnRobot
 
@@ -83,9 +89,9 @@ class Goal:
 class ActionWorld:
     """The world in real time, the action server on simulation time, and a client for both."""
 
-    def __init__(self, ros, **server_parameters):
+    def __init__(self, ros, world_parameters=None, **server_parameters):
         self.ros = ros
-        self.world = ros.start_world(real_time_factor=1.0)
+        self.world = ros.start_world(real_time_factor=1.0, **(world_parameters or {}))
         overrides = [Parameter('use_sim_time', value=True)]
         overrides += [Parameter(name, value=value) for name, value in server_parameters.items()]
         self.server = ros.add_node(RobotTurningActionServer(parameter_overrides=overrides))
@@ -303,3 +309,155 @@ def test_both_programs_are_executables_of_the_package():
     executables = {name for name in os.listdir(directory)
                    if os.access(os.path.join(directory, name), os.X_OK)}
     assert {'robot_turning_action_server', 'robot_turning_action_client'} <= executables
+
+
+def turning_at_full_speed(action_world, angle, angular_vel):
+    """Send a goal and follow tinybot until it turns at full speed; return goal and truth."""
+    truth = GroundTruth(action_world)
+    truth.wait_at_rest()
+    truth.turned = 0.0
+    goal = Goal(action_world, angle, angular_vel)
+    assert goal.handle.accepted
+    assert truth.follow_until(lambda: abs(truth.yaw_rate) > 0.9 * angular_vel)
+    truth.follow_for(0.5)
+    assert not goal.done()
+    return goal, truth
+
+
+def told_to_stop_and_still(action_world):
+    """Check that the last command was a stop and tinybot is still half a second later."""
+    assert action_world.ros.wait_for(lambda: action_world.cmd_vel[-1] == Twist())
+    told_to_stop = len(action_world.cmd_vel)
+    action_world.world.wait_sim(0.5)
+    assert abs(action_world.state().twist.angular.z) < 1e-3
+    assert all(msg == Twist() for msg in action_world.cmd_vel[told_to_stop:])
+
+
+def test_a_reset_during_a_goal_aborts_it_at_once_and_the_next_goal_succeeds(action_world):
+    goal, _ = turning_at_full_speed(action_world, 3.0, 0.5)
+
+    action_world.world.empty('reset_simulation')
+
+    # Within a second of wall time from the world's answer to the reset.
+    assert action_world.ros.wait_for(goal.done, timeout=1.0), 'no result within 1 s'
+    status, result = goal.result()
+    print(f'\nreset: {result.message}')
+    assert status == GoalStatus.STATUS_ABORTED
+    assert not result.success
+    assert 'time jumped back by' in result.message
+    assert '(the simulation was reset)' in result.message
+    assert 0.1 < result.angle_turned < 3.0
+    told_to_stop_and_still(action_world)
+    status, result, _, turned = action_world.turn(1.0, 0.5)
+    assert status == GoalStatus.STATUS_SUCCEEDED
+    assert result.angle_turned == pytest.approx(1.0, abs=0.01)
+    assert turned == pytest.approx(1.0, rel=0.02)
+
+
+@pytest.fixture
+def world_odometry_world(ros, tmp_path):
+    """Tinybot with odometry from the simulator's ground truth, which a move shows."""
+    urdf = pathlib.Path(model_path('tinybot.urdf')).read_text()
+    encoder = '<odometry_source>0</odometry_source>'
+    assert encoder in urdf
+    path = tmp_path / 'tinybot_world_odometry.urdf'
+    path.write_text(urdf.replace(encoder, '<odometry_source>1</odometry_source>'))
+    return ActionWorld(ros, world_parameters={
+        'models': [str(path)], 'model_names': ['tinybot'], 'model_namespaces': ['']})
+
+
+@pytest.mark.parametrize('yaw_change, shift, jump', [
+    (1.0, 0.0, r'its heading jumped by \+(\S+) rad'),
+    (0.0, 1.0, r'its position jumped by (\S+) m'),
+], ids=['turned', 'shifted'])
+def test_a_robot_moved_during_a_goal_ends_it_and_is_told_to_stop(
+        world_odometry_world, yaw_change, shift, jump):
+    action_world = world_odometry_world
+    goal, truth = turning_at_full_speed(action_world, 3.0, 0.5)
+    state = action_world.state()
+    position, yaw = state.pose.position, yaw_of(state.pose.orientation) + yaw_change
+    moved_to = make_pose(position.x + shift, position.y, position.z,
+                         quaternion=(0.0, 0.0, math.sin(yaw / 2.0), math.cos(yaw / 2.0)))
+
+    assert action_world.world.set_state('tinybot', moved_to).success
+
+    assert truth.follow_until(goal.done, timeout=10.0)
+    status, result = goal.result()
+    print(f'\nmoved: {result.message}')
+    assert status == GoalStatus.STATUS_ABORTED
+    assert not result.success
+    named = re.match(f'the robot was moved: {jump}', result.message)
+    assert named, result.message
+    assert float(named.group(1)) == pytest.approx(yaw_change + shift, abs=0.05)
+    # What the robot turned itself, the jump left out.
+    assert 0.1 < result.angle_turned < 1.0
+    told_to_stop_and_still(action_world)
+    status, result, _, turned = action_world.turn(-1.0, 0.5)
+    assert status == GoalStatus.STATUS_SUCCEEDED
+    assert turned == pytest.approx(-1.0, rel=0.02)
+
+
+def test_a_tinybot_moved_during_a_goal_turns_the_rest_from_where_it_was_put(action_world):
+    # Tinybot's odometry counts its wheels' turns, which a move leaves as they were: the
+    # server cannot see it, and the goal ends as any other, neither hanging nor spinning.
+    goal, truth = turning_at_full_speed(action_world, 2.0, 0.5)
+    state = action_world.state()
+    yaw = yaw_of(state.pose.orientation) + 1.0
+    moved_to = make_pose(state.pose.position.x, state.pose.position.y, state.pose.position.z,
+                         quaternion=(0.0, 0.0, math.sin(yaw / 2.0), math.cos(yaw / 2.0)))
+
+    assert action_world.world.set_state('tinybot', moved_to).success
+
+    assert truth.follow_until(goal.done, timeout=TURN_TIMEOUT)
+    truth.wait_at_rest()
+    status, result = goal.result()
+    print(f'\nmoved tinybot: {result.message}; ground truth {truth.turned:.4f} rad')
+    assert status == GoalStatus.STATUS_SUCCEEDED
+    assert result.angle_turned == pytest.approx(2.0, abs=0.01)
+    assert truth.turned == pytest.approx(3.0, abs=0.2)
+    told_to_stop_and_still(action_world)
+
+
+def test_a_robot_deleted_during_a_goal_ends_it_once_odometry_has_been_silent(action_world):
+    goal, _ = turning_at_full_speed(action_world, 3.0, 0.5)
+    world = action_world.world
+
+    assert world.delete('tinybot').success
+    deleted_at = world.now()
+
+    status, result = goal.result()
+    assert status == GoalStatus.STATUS_ABORTED
+    assert result.message.startswith('no odometry on /odom for 1.0 s')
+    # Ended by simulation time, one odom_timeout after the last odometry (the upper bound only
+    # leaves room for the result's way back on a busy machine).
+    assert deleted_at + 0.9 < world.now() < deleted_at + 2.0
+    assert action_world.cmd_vel[-1] == Twist()
+
+
+def odometry(stamp, yaw):
+    """Return an odometry message of tinybot at rest at the origin, facing yaw."""
+    msg = Odometry()
+    msg.header.stamp = time_msg(stamp)
+    msg.pose.pose = make_pose(0.0, 0.0, 0.0,
+                              quaternion=(0.0, 0.0, math.sin(yaw / 2.0), math.cos(yaw / 2.0)))
+    return msg
+
+
+def test_odometry_sent_before_time_went_back_and_heard_after_is_left_out(rclpy_session):
+    # The order a busy executor may hand them over in: odometry, the jump back (from /clock),
+    # odometry the world sent before its reset, then odometry from after it.
+    server = RobotTurningActionServer(
+        parameter_overrides=[Parameter('use_sim_time', value=True)])
+    try:
+        server.odom_callback(odometry(5.00, 0.3))
+        server.time_jumped(TimeJump(ClockChange.ROS_TIME_NO_CHANGE, Duration(seconds=-5.0)))
+        server.odom_callback(odometry(5.02, 0.31))
+        assert server.heading is None and server.last_odom is None
+
+        server.odom_callback(odometry(0.02, 0.0))
+        server.odom_callback(odometry(0.04, 0.01))
+
+        assert server.heading == pytest.approx(0.01)
+        assert seconds_of(server.last_odom.header.stamp) == pytest.approx(0.04)
+    finally:
+        server.destroy_node()

@@ -3,6 +3,8 @@
 from geometry_msgs.msg import Twist
 from programs import program_path, run_program
 import pytest
+from rclpy.parameter import Parameter
+from service_tutorial.lesson.robot_turning_client import NOT_CARRIED_OUT
 from service_tutorial.lesson.robot_turning_server import RobotTurningServer
 from service_tutorial.lesson.turning_limits import DURATION_PROMPT, NOT_A_NUMBER
 from service_tutorial.lesson.turning_limits import VELOCITY_TOO_HIGH
@@ -47,3 +49,19 @@ def test_client_started_before_the_server_says_it_waits_then_sends(ros, start_pr
     stdout, stderr = client.communicate(timeout=30)
     assert client.returncode == 0, stderr
     assert stdout.strip() == 'success: True'
+
+
+def test_client_says_when_a_reset_cut_the_turn_short(ros, start_program):
+    world = ros.start_world()
+    ros.add_node(RobotTurningServer(parameter_overrides=[Parameter('use_sim_time', value=True)]))
+    cmd_vel = ros.subscribe(Twist, '/cmd_vel')
+    client = start_program([program_path('robot_turning_client'), '10', '0.5'])
+    assert ros.wait_for(lambda: any(msg.angular.z == 0.5 for msg in cmd_vel), timeout=30.0)
+    world.wait_sim(0.5)
+
+    world.empty('reset_simulation')
+
+    stdout, stderr = client.communicate(timeout=10)
+    assert client.returncode == 1, stderr
+    assert stdout.strip() == 'success: False'
+    assert f'robot_turning_client: {NOT_CARRIED_OUT}' in stderr

@@ -9,6 +9,7 @@ from rclpy.parameter import Parameter
 from service_tutorial.conversions import yaw_of
 from service_tutorial.lesson.robot_turning_server import RobotTurningServer
 from service_tutorial.world_node.pacing import MAX_TICK_SIMULATED
+from simulation_interfaces.srv import ResetSimulation
 from srv_interfaces.srv import ControlTurningMessage
 
 pytestmark = pytest.mark.ros
@@ -153,3 +154,67 @@ def test_a_zero_second_turn_stops_tinybot_and_succeeds(turning_world):
     assert response.success
     assert turning_world.ros.wait_for(lambda: turning_world.commands() == [0.0])
     assert turning_world.heading_at_rest() == pytest.approx(before, abs=1e-4)
+
+
+def lesson_reset(world):
+    """Reset the simulation the lesson's way: time to 0, every model at its spawn pose."""
+    world.empty('reset_simulation')
+
+
+def standard_time_reset(world):
+    """Put only time back through the standard /reset_simulation; models stay where they are."""
+    result = world.call(ResetSimulation, '/reset_simulation', ResetSimulation.Request(
+        scope=ResetSimulation.Request.SCOPE_TIME)).result
+    assert result.result == result.RESULT_OK, result.error_message
+
+
+def reset_during_a_long_turn(turning_world, *queued, reset=lesson_reset):
+    """Start a 10 s turn (and queue more), reset the simulation 1 s in; return the futures."""
+    ros, world = turning_world.ros, turning_world.world
+    turning_world.heading_at_rest()
+    long_turn = turning_world.turn_async(10, 0.5)
+    assert ros.wait_for(lambda: 0.5 in turning_world.commands())
+    more = [turning_world.turn_async(*turn) for turn in queued]
+    world.wait_sim(1.0)
+    assert not long_turn.done()
+    reset(world)
+    # Within a second of wall time from the world's answer to the reset, not ten of sim time.
+    assert ros.wait_for(long_turn.done, timeout=1.0), 'no answer within 1 s of the reset'
+    return long_turn, more
+
+
+@pytest.mark.parametrize('reset', [lesson_reset, standard_time_reset],
+                         ids=['mujoco-reset_simulation', 'standard-reset-of-time'])
+def test_a_reset_during_a_turn_ends_it_at_once_stops_tinybot_and_turning_goes_on(
+        turning_world, capfd, reset):
+    ros, world = turning_world.ros, turning_world.world
+
+    long_turn, _ = reset_during_a_long_turn(turning_world, reset=reset)
+
+    assert not long_turn.result().success
+    assert ros.wait_for(lambda: turning_world.cmd_vel[-1] == Twist())
+    told_to_stop = len(turning_world.cmd_vel)
+    world.wait_sim(0.5)
+    assert abs(turning_world.state().twist.angular.z) < 1e-3
+    assert turning_world.commands()[told_to_stop - 1:] == [0.0]  # nothing sent after the stop
+    log = capfd.readouterr().err
+    assert 'simulation time jumped back by' in log, log
+    assert '(the simulation was reset): turn of 0.5 rad/s for 10 s ended after' in log, log
+    response, turned = turning_world.turn(1, 0.5)
+    assert response.success
+    assert turned == pytest.approx(0.5, abs=0.01 + 0.5 * 4 * MAX_TICK_SIMULATED)
+
+
+def test_turns_queued_behind_a_turn_a_reset_ended_are_carried_out(turning_world):
+    before = turning_world.heading()  # the spawn heading, where the reset puts tinybot back
+
+    long_turn, (queued,) = reset_during_a_long_turn(turning_world, (1, -0.5))
+
+    assert not long_turn.result().success
+    assert turning_world.ros.wait_for(queued.done, timeout=10.0)
+    assert queued.result().success
+    turned = math.remainder(turning_world.heading_at_rest() - before, math.tau)
+    assert turned == pytest.approx(-0.5, abs=0.01 + 0.5 * 4 * MAX_TICK_SIMULATED)
+    commands = turning_world.commands()
+    changes = [z for i, z in enumerate(commands) if i == 0 or z != commands[i - 1]]
+    assert changes == [0.5, 0.0, -0.5, 0.0]
