@@ -34,6 +34,7 @@ from rosgraph_msgs.msg import Clock
 from service_tutorial.conversions import fill_time_msg
 from service_tutorial.robot_files import file_model_name, read_robot_file
 from service_tutorial.sim import frames
+from service_tutorial.sim.recovery import Removal
 from service_tutorial.sim.validation import quoted
 from service_tutorial.sim.validation import WorldError
 from service_tutorial.world_node.camera_stream import CAMERA_PARAMETERS, CameraStream
@@ -338,10 +339,12 @@ class MujocoWorld(Node):
             try:
                 interface.make_topics()
             except Exception as error:  # the middleware's: every name was checked at spawn
-                self.get_logger().error(f'could not make the topics of model {quoted(name)} '
-                                        f'({error}); removed it from the world')
+                reason = f'its topics could not be made ({error})'
+                self.get_logger().error(f'model {quoted(name)}: {reason}; removed it from the '
+                                        'world')
                 self.models.pop(name)
                 self.world.delete_model(name)
+                self._announce_removal(Removal(name, self.world.time, reason))
 
     def delete_model(self, name):
         """Remove a model from the world along with its ROS interface."""

@@ -308,7 +308,7 @@ def refusal_of(path, old, new):
      'at most one turn (6.2832 rad) apart: 7.5708 rad'),
     ('<samples>181</samples>', '<samples>1000000000</samples>',
      "sensor 'front_laser' <ray/scan/horizontal/samples> 1000000000 times <resolution> 1 "
-     'must give at most 100000 readings per scan'),
+     'must give at most 20000 readings per scan'),
     ('<update_rate>10</update_rate>', '<update_rate>1e9</update_rate>',
      "sensor 'front_laser' <update_rate> must be at most 10000 Hz: 1e+09"),
     ('<update_rate>10</update_rate>', '<update_rate>-5</update_rate>',
@@ -348,6 +348,10 @@ def test_bad_laser_blocks_are_refused_naming_sensor_tag_and_value(old, new, mess
      "sensor 'front_camera' <camera/image/width> must be a whole number above 0: '0'"),
     ('<height>120</height>', '<height>100000</height>',
      "sensor 'front_camera' <camera/image/height> must be at most 4096: 100000"),
+    ('<width>160</width>\n          <height>120</height>',
+     '<width>4096</width><height>4096</height>',
+     "sensor 'front_camera' <camera/image> of 4096x4096 has 16777216 pixels, more than "
+     '4194304 (2048x2048)'),
     ('<horizontal_fov>1.0</horizontal_fov>', '<horizontal_fov>3.5</horizontal_fov>',
      "sensor 'front_camera' <camera/horizontal_fov> must be below pi for a pinhole camera: "
      '3.5'),

@@ -179,7 +179,7 @@ BAD_SPAWNS = [
     ('laser of a billion samples', 'newcomer',
      tinybot_with('<samples>360</samples>', '<samples>1000000000</samples>'), pose(), '', '',
      "sensor 'laser' <ray/scan/horizontal/samples> 1000000000 times <resolution> 1 must give "
-     'at most 100000 readings per scan'),
+     'at most 20000 readings per scan'),
     ('sensor update rate of 1e9 Hz', 'newcomer',
      tinybot_with('<update_rate>5</update_rate>', '<update_rate>1e9</update_rate>'), pose(), '',
      '', "sensor 'laser' <update_rate> must be at most 10000 Hz: 1e+09"),

@@ -36,7 +36,9 @@ HIDDEN_GROUP = 5
 FULL_TURN = 2.0 * math.pi
 ANGLE_ROUNDING = 1e-3
 # The most readings a scan may have (samples x resolution); real lasers give a few thousand.
-MAX_SCAN_READINGS = 100000
+# A scan is cast on the stepping thread: 20,000 beams took 13 ms here and the world answered
+# within 60 ms at 30 scans a second; 100,000 took 40 to 65 ms and answers took 300 ms.
+MAX_SCAN_READINGS = 20000
 RAY_GEOM_GROUPS = np.array([int(group in (0, COLLISION_GROUP)) for group in range(6)],
                            dtype=np.uint8)
 
