@@ -175,17 +175,28 @@ class Pacer:
             yield from self._real_time_chunks(sim_time, other_due)
 
     def _real_time_chunks(self, sim_time, other_due):
-        wall_elapsed = self._wall_clock() - self._wall_anchor
-        target = self._sim_anchor + wall_elapsed * self.real_time_factor
+        wall = self._wall_clock()
+        target = self._sim_anchor + (wall - self._wall_anchor) * self.real_time_factor
         behind = int((target - sim_time()) / self.timestep)
         if behind > MAX_LAG / self.timestep:
             behind = int(MAX_LAG / self.timestep)
             # Go on from where this tick ends, as if the wall clock had waited for it.
             self.anchor(sim_time() + behind * self.timestep)
+        # However far behind, a tick steps for MAX_STEP_BUDGET of wall time at most, so that
+        # calls are answered between two ticks even when steps are slow (lasers cast at every
+        # step): the world then runs slower than real time, as it does when it cannot keep up.
+        deadline = wall + MAX_STEP_BUDGET
         while behind > 0:
+            start = self._wall_clock()
+            if start >= deadline:
+                return
             steps = self.steps_to_next_due(sim_time(), other_due(), limit=behind)
+            steps = max(1, min(steps, int((deadline - start)
+                                          / max(self.step_wall_time, 1e-7))))
             yield steps
             behind -= steps
+            self.step_wall_time += 0.5 * (
+                (self._wall_clock() - start) / steps - self.step_wall_time)
 
     def requested_chunks(self, count, sim_time, other_due=lambda: math.inf):
         """

@@ -113,6 +113,28 @@ def test_real_time_does_not_catch_up_more_than_a_tenth_of_a_second():
     assert world.steps == 50 + 5
 
 
+def test_slow_steps_in_real_time_end_a_tick_after_its_budget_so_calls_come_in_between():
+    # 20 ms a step (lasers cast at every step): real time cannot be kept.
+    pacer, world, wall, _ = make(1.0, step_cost=0.02)
+    wall.now += 0.1  # 50 steps fall due
+    world.tick()  # the pacer learns what a step costs
+    for _ in range(3):
+        start = wall.now
+        world.tick()
+        # Knowing it, a tick ends within a step of its budget.
+        assert wall.now - start <= pacing.MAX_STEP_BUDGET + 0.02 + 1e-9
+        assert world.chunks[-1] <= 3
+    assert pacer.step_wall_time == pytest.approx(0.02, rel=0.05)
+    assert world.time < wall.now
+    # Cheap steps again: the world catches up with real time as before, a tenth of a second
+    # behind at most.
+    world.step_cost = 0.0
+    wall.now += 0.01
+    world.tick()
+    assert world.time == pytest.approx(pacer._sim_anchor + (wall.now - pacer._wall_anchor),
+                                       abs=TIMESTEP)
+
+
 def test_time_the_world_was_held_is_not_made_up_but_steps_due_before_are_taken():
     pacer, world, wall, _ = make(1.0)
     wall.now += 0.004  # two steps fall due
