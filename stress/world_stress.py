@@ -686,6 +686,11 @@ def print_storm(storm, clients):
         slowest = ', '.join(f'{service} {elapsed * 1e3:.0f} ms at {at - storm["started"]:.1f} s'
                             for elapsed, service, at in reversed(answers[-SLOWEST_SHOWN:]))
         print(f'  slowest: {slowest}')
+        over = collections.Counter(service for elapsed, service, _ in answers
+                                   if elapsed > STORM_P99_TARGET)
+        print(f'  above {STORM_P99_TARGET:g} s: {sum(over.values())} calls ('
+              + ', '.join(f'{service} {over[service]}'
+                          for service in ('get_model_list', 'get_model_state')) + ')')
     for robot in storm['robots']:
         print(f'  {robot}: {storm["received"][robot, "images"]:.1f} images/s, '
               f'{storm["received"][robot, "scans"]:.1f} scans/s received')
