@@ -13,10 +13,16 @@ are killed in the middle of a call. Phases:
   the world must go on answering and stepping;
 - cycles: --cycles spawn/delete cycles; the world's memory (RSS) at the end must be within
   10 % of what it was after the first 100, and the last 100 cycles no slower than the first
-  100 by more than 10 %.
+  100 by more than 10 %;
+- sensor storm: --storm-robots tinybots with the largest camera and laser the world accepts,
+  measuring at every physics step, all listened to, while every client lists the world and
+  reads a storm robot's state for --storm-seconds; every call must be answered within
+  CALL_TIMEOUT, /clock must never stand still for more than 1 s of wall time, and the p99
+  answer time must stay within --storm-p99-limit (the issue's target, 0.2 s).
 
 It prints a summary table and exits with status 1 if a property fails. Run it with
-scripts/stress [--seconds S] [--cycles N] [--clients N] [--real-time-factor F].
+scripts/stress [--phases P,...] [--seconds S] [--cycles N] [--clients N] [--storm-seconds S]
+[--storm-robots N] [--storm-p99-limit S] [--real-time-factor F].
 """
 
 import argparse
@@ -45,6 +51,15 @@ MIXED_OPERATIONS = (('spawn', 4), ('delete', 3), ('get_state', 4), ('set_state',
                     ('bad_request', 2), ('list_models', 2), ('reset_world', 1))
 # Models one mixed-phase client keeps at most; beyond, its spawns turn into deletes.
 MAX_OWNED = 6
+PHASES = ('same-name', 'mixed', 'killed', 'cycles', 'storm')
+# The issue's target for the p99 answer time while the storm robots are listened to, in s.
+STORM_P99_TARGET = 0.2
+# The longest /clock may stand still during the storm, in s of wall time.
+CLOCK_STILL_LIMIT = 1.0
+# Wall time the clients make the storm's calls before the storm robots come, for comparison.
+CALM_SECONDS = 5.0
+# Slowest storm calls named in the summary.
+SLOWEST_SHOWN = 5
 
 
 def world_command(real_time_factor):
@@ -441,11 +456,258 @@ def cycles_phase(client, tally, models, world_pid, cycles):
     return figures
 
 
-def print_summary(tally, figures, problems, seconds, clients):
-    """Print the table of calls and failures, then the drift figures and the verdict."""
+def replace_once(text, old, new):
+    """Return text with old replaced by new, refusing a model where old is not there once."""
+    if text.count(old) != 1:
+        raise RuntimeError(f'tinybot.urdf holds {text.count(old)} times {old!r}, not once: '
+                           'the storm robot cannot be built from it')
+    return text.replace(old, new)
+
+
+def storm_robot(tinybot, rate):
+    """Return tinybot with the largest camera and laser the world accepts, measuring at rate."""
+    from service_tutorial.sim.plugins.camera_sensor import MAX_IMAGE_PIXELS, MAX_IMAGE_SIDE
+    from service_tutorial.sim.plugins.ray_sensor import MAX_SCAN_READINGS
+    side = min(math.isqrt(MAX_IMAGE_PIXELS), MAX_IMAGE_SIDE)
+    sensors = {'width': side, 'height': side, 'readings': MAX_SCAN_READINGS, 'rate': rate}
+    xml = tinybot
+    # The camera's size and rate, then the laser's readings and rate.
+    for tag, old, new in (('width', 320, side), ('height', 240, side), ('update_rate', 10, rate),
+                          ('samples', 360, MAX_SCAN_READINGS), ('update_rate', 5, rate)):
+        xml = replace_once(xml, f'<{tag}>{old}</{tag}>', f'<{tag}>{new:g}</{tag}>')
+    return xml, sensors
+
+
+def physics_rate(client):
+    """Return the world's physics steps per second of simulation time, from its timestep."""
+    from rcl_interfaces.srv import GetParameters
+    response = client.call(GetParameters, 'get_parameters', GetParameters.Request(
+        names=['timestep']))
+    if response is None or len(response.values) != 1 or response.values[0].double_value <= 0.0:
+        raise RuntimeError('the world did not tell its timestep')
+    return 1.0 / response.values[0].double_value
+
+
+def nearest_rank(ordered, fraction):
+    """Return the value at a fraction of an ordered list, by nearest rank."""
+    return ordered[max(0, math.ceil(fraction * len(ordered)) - 1)]
+
+
+class StormListener:
+    """Subscriptions to every image and scan of the storm robots, and to /clock."""
+
+    def __init__(self, robots):
+        """Listen to each robot's image_raw and scan; /clock on a node of its own."""
+        from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+        from rosgraph_msgs.msg import Clock
+        from sensor_msgs.msg import Image, LaserScan
+        self.sensors = WorldClient('storm_listener')
+        self.clock = WorldClient('storm_clock')
+        self._lock = threading.Lock()
+        self.received = collections.Counter()  # (robot, 'images' or 'scans') -> messages
+        self.ticks = []  # (wall time, simulation time) of each /clock message
+        self.subscriptions = []
+        for robot in robots:
+            for kind, msg_type, topic in (('images', Image, 'camera/image_raw'),
+                                          ('scans', LaserScan, 'scan')):
+                # Raw: counted, not turned into Python messages, to leave the callers the CPU.
+                self.subscriptions.append(self.sensors.node.create_subscription(
+                    msg_type, f'/{robot}/{topic}', self._counter(robot, kind), 10, raw=True))
+        self.subscriptions.append(self.clock.node.create_subscription(
+            Clock, '/clock', self._tick, QoSProfile(
+                depth=1, reliability=ReliabilityPolicy.RELIABLE,
+                durability=DurabilityPolicy.TRANSIENT_LOCAL)))
+
+    def _counter(self, robot, kind):
+        def count(_):
+            with self._lock:
+                self.received[robot, kind] += 1
+        return count
+
+    def _tick(self, msg):
+        self.ticks.append((time.monotonic(), msg.clock.sec + 1e-9 * msg.clock.nanosec))
+
+    def counts(self):
+        """Return a copy of the messages received so far, by robot and kind."""
+        with self._lock:
+            return collections.Counter(self.received)
+
+    def clock_figures(self, start, end):
+        """Return the simulation time passed and /clock's longest standstill in [start, end]."""
+        ticks = [tick for tick in list(self.ticks) if start <= tick[0] <= end]
+        if not ticks:
+            return 0.0, end - start
+        still, moved_at, last = 0.0, start, ticks[0][1]
+        for wall, sim in ticks[1:]:
+            if sim > last:
+                still, moved_at, last = max(still, wall - moved_at), wall, sim
+        return ticks[-1][1] - ticks[0][1], max(still, end - moved_at)
+
+    def close(self):
+        """Stop listening."""
+        for node in (self.sensors, self.clock):
+            node.close()
+
+
+def storm_caller(index, services, tally, robots, deadline, answers):
+    """List the world and read a storm robot's state in turn until the deadline."""
+    calls = 0
+    while time.monotonic() < deadline:
+        robot = robots[(index + calls // 2) % len(robots)]
+        service = 'get_model_list' if calls % 2 == 0 else 'get_model_state'
+        fields = {} if service == 'get_model_list' else {'model_name': robot}
+        start = time.monotonic()
+        response = services.call(service, **fields)
+        answered = time.monotonic()
+        calls += 1
+        if response is None:
+            tally.count('storm', 'no answer in time', f'{service} at {start:.1f}')
+            continue
+        answers.append((answered - start, service, start))
+        if not response.success:
+            tally.count('storm', 'refused unexpectedly', response.status_message)
+        elif service == 'get_model_list' and not set(robots) <= set(response.model_names):
+            tally.count('storm', 'storm robot missing from the list',
+                        sorted(set(robots) - set(response.model_names)))
+        elif service == 'get_model_state' and not all(math.isfinite(value) for value in (
+                response.pose.position.x, response.pose.position.y, response.pose.position.z)):
+            tally.count('storm', 'state missing or not finite', robot)
+        else:
+            tally.count('storm', 'ok')
+
+
+def call_window(clients, tally, robots, seconds, figures):
+    """Have every client call for seconds; return the sorted answers, the start and the end."""
+    answers = []
+    start = time.monotonic()
+    threads = [threading.Thread(target=storm_caller, daemon=True, args=(
+        index, services, tally, robots, start + seconds, answers))
+        for index, services in enumerate(clients)]
+    for thread in threads:
+        thread.start()
+    for thread in threads:
+        thread.join(timeout=seconds + 2 * CALL_TIMEOUT)
+    if any(thread.is_alive() for thread in threads):
+        figures['problems'].append('storm callers hung: ' + '; '.join(
+            where_stuck(thread) for thread in threads if thread.is_alive()))
+    return sorted(answers), start, time.monotonic()
+
+
+def storm_phase(clients, tally, models, arguments, world):
+    """Listen to storm robots' largest sensors while every client calls; return the figures."""
+    rate = physics_rate(clients[0].client)
+    xml, sensors = storm_robot(models['tinybot'], rate)
+    before = clients[0].models()
+    figures = {'sensors': sensors, 'problems': []}
+    # The same calls first without the storm robots, for comparison; each client finds its
+    # services before.
+    for services in clients:
+        services.models()
+    figures['calm'] = call_window(clients, tally, ['tinybot'],
+                                  min(CALM_SECONDS, arguments.storm_seconds), figures)[0]
+    robots = []
+    for index in range(arguments.storm_robots):
+        robot = f'storm{index}'
+        spawned = judge(tally, 'storm', clients[0].spawn(
+            robot, xml, -4.0, 3.0 * (index - (arguments.storm_robots - 1) / 2.0),
+            namespace=robot))
+        if spawned is None or not spawned.success:
+            figures['problems'].append(f'storm robot {robot} could not be spawned')
+            break
+        robots.append(robot)
+    figures['robots'] = robots
+    if not robots:
+        raise RuntimeError('no storm robot could be spawned: ' + '; '.join(figures['problems']))
+    listener = StormListener(robots)
+    try:
+        # The sensors start measuring once the world sees they are listened to.
+        started = time.monotonic()
+        while (time.monotonic() < started + CALL_TIMEOUT and world.poll() is None
+               and len(listener.counts()) < 2 * len(robots)):
+            time.sleep(0.05)
+        figures['first_messages'] = time.monotonic() - started
+        counts_at_start = listener.counts()
+        answers, start, end = call_window(clients, tally, robots, arguments.storm_seconds,
+                                          figures)
+        received = listener.counts() - counts_at_start
+        simulated, still = listener.clock_figures(start, end)
+    finally:
+        for robot in robots:
+            judge(tally, 'storm', clients[0].call('delete_model', model_name=robot))
+        listener.close()
+    figures.update(seconds=end - start, simulated=simulated, still=still,
+                   started=start, answers=answers, received={
+                       (robot, kind): received[robot, kind] / (end - start)
+                       for robot in robots for kind in ('images', 'scans')})
+    silent = [f'{robot} {kind}' for (robot, kind), rate in figures['received'].items()
+              if rate == 0.0]
+    if silent:
+        figures['problems'].append(f'nothing received during the storm from {silent}')
+    if still > CLOCK_STILL_LIMIT:
+        figures['problems'].append(f'/clock stood still for {still:.2f} s of wall time during '
+                                   f'the storm (at most {CLOCK_STILL_LIMIT:g} s)')
+    if answers:
+        p99 = nearest_rank(answers, 0.99)[0]
+        if p99 > arguments.storm_p99_limit:
+            figures['problems'].append(f'storm p99 answer time {p99:.3f} s is above '
+                                       f'--storm-p99-limit {arguments.storm_p99_limit:g} s')
+    else:
+        figures['problems'].append('no storm call was answered')
+    after = clients[0].models()
+    if after != before or not clients[0].finite_state('tinybot'):
+        figures['problems'].append(f'after the storm the world lists {after}, not {before}, '
+                                   "or did not give tinybot's state")
+    return figures
+
+
+def answer_times(answers):
+    """Return the count and the p50, p99 and max answer times of sorted answers, in words."""
+    p50, p99 = (nearest_rank(answers, fraction)[0] for fraction in (0.5, 0.99))
+    return (f'{len(answers)} calls answered: p50 {p50 * 1e3:.1f} ms, p99 {p99 * 1e3:.1f} ms, '
+            f'max {answers[-1][0] * 1e3:.1f} ms')
+
+
+def print_storm(storm, clients):
+    """Print the figures of the sensor storm."""
+    sensors = storm['sensors']
+    print(f'\nsensor storm: {len(storm["robots"])} robots ({", ".join(storm["robots"])}), each '
+          f'a {sensors["width"]}x{sensors["height"]} camera and a {sensors["readings"]}-reading '
+          f'laser at {sensors["rate"]:g} Hz (every physics step), all listened to; {clients} '
+          f'clients calling for {storm["seconds"]:.1f} s (first messages after '
+          f'{storm["first_messages"]:.1f} s)')
+    if storm['calm']:
+        print(f'  before the storm robots came, {answer_times(storm["calm"])}')
+    answers = storm['answers']
+    if answers:
+        p99 = nearest_rank(answers, 0.99)[0]
+        print(f'  during the storm, {answer_times(answers)}')
+        print(f'  p99 {p99:.3f} s (target {STORM_P99_TARGET:g} s): '
+              f'{"holds" if p99 <= STORM_P99_TARGET else "does not hold"}')
+        slowest = ', '.join(f'{service} {elapsed * 1e3:.0f} ms at {at - storm["started"]:.1f} s'
+                            for elapsed, service, at in reversed(answers[-SLOWEST_SHOWN:]))
+        print(f'  slowest: {slowest}')
+        over = collections.Counter(service for elapsed, service, _ in answers
+                                   if elapsed > STORM_P99_TARGET)
+        print(f'  above {STORM_P99_TARGET:g} s: {sum(over.values())} calls ('
+              + ', '.join(f'{service} {over[service]}'
+                          for service in ('get_model_list', 'get_model_state')) + ')')
+    for robot in storm['robots']:
+        print(f'  {robot}: {storm["received"][robot, "images"]:.1f} images/s, '
+              f'{storm["received"][robot, "scans"]:.1f} scans/s received')
+    still = storm['still']
+    print(f'  simulation time {storm["simulated"]:.2f} s in {storm["seconds"]:.1f} s of wall '
+          f'time: real-time factor {storm["simulated"] / storm["seconds"]:.3f}; /clock stood '
+          f'still at most {still:.2f} s '
+          f'({"kept moving" if still <= CLOCK_STILL_LIMIT else "STOPPED"})')
+
+
+def print_summary(tally, figures, problems, arguments):
+    """Print the table of calls and failures, then the figures of each phase and the verdict."""
     print()
     print(f'{"phase":<16}{"calls":>8}{"ok":>8}{"refused as asked":>18}{"failures":>10}')
-    for phase in ('same name', 'mixed', 'killed clients', 'cycles'):
+    for phase in ('same name', 'mixed', 'killed clients', 'cycles', 'storm'):
+        if phase not in tally.calls:
+            continue
         outcomes = tally.outcomes.get(phase, {})
         failures = sum(number for kind, number in outcomes.items()
                        if kind not in ('ok', 'refused as asked'))
@@ -456,8 +718,9 @@ def print_summary(tally, figures, problems, seconds, clients):
         example = tally.examples.get((phase, kind), '')
         detail = f' (e.g. {example})' if example else ''
         print(f'  failure in {phase}: {kind} x{number}{detail}')
-    print(f'\nmixed phase: {clients} clients for {seconds:g} s, '
-          f'{figures.get("mixed_models", 0)} client models alive at the end')
+    if 'mixed_models' in figures:
+        print(f'\nmixed phase: {arguments.clients} clients for {arguments.seconds:g} s, '
+              f'{figures["mixed_models"]} client models alive at the end')
     if 'arrived' in figures:
         print(f'killed clients: {figures["killed"]} killed in the middle of a spawn, '
               f'{figures["arrived"]} of those spawns reached the world before the kill')
@@ -470,6 +733,8 @@ def print_summary(tally, figures, problems, seconds, clients):
         first, last = figures['first'] * 1e3, figures['last'] * 1e3
         print(f'spawn+delete cycle (median): {first:.1f} ms over the first {WINDOW}, '
               f'{last:.1f} ms over the last {WINDOW} ({100 * (last - first) / first:+.1f} %)')
+    if 'storm' in figures:
+        print_storm(figures['storm'], arguments.clients)
     for problem in problems:
         print(f'PROBLEM: {problem}')
     print('PASS' if not problems and not tally.failures() else 'FAIL')
@@ -490,9 +755,28 @@ def drift_problems(figures):
     return problems
 
 
+def phase_list(text):
+    """Return the phases named in a comma-separated list, in the order they run."""
+    names = {name.strip() for name in text.split(',') if name.strip()}
+    unknown = sorted(names - set(PHASES))
+    if unknown or not names:
+        raise argparse.ArgumentTypeError(f'phases are some of {",".join(PHASES)}: {text!r}')
+    return tuple(phase for phase in PHASES if phase in names)
+
+
+def positive_int(text):
+    """Return a whole number of at least 1."""
+    if not text.isdigit() or int(text) < 1:
+        raise argparse.ArgumentTypeError(f'must be a whole number of at least 1: {text!r}')
+    return int(text)
+
+
 def parse_arguments(argv):
     """Read the command line."""
     parser = argparse.ArgumentParser(description=__doc__.strip().splitlines()[0])
+    parser.add_argument('--phases', type=phase_list, default=PHASES,
+                        help=f'comma-separated phases to run, of {",".join(PHASES)} '
+                             '(default all, in that order)')
     parser.add_argument('--seconds', type=float, default=60.0,
                         help='length of the mixed phase (default 60)')
     parser.add_argument('--cycles', type=int, default=1000,
@@ -501,6 +785,13 @@ def parse_arguments(argv):
     parser.add_argument('--clients', type=int, default=8, help='concurrent clients (default 8)')
     parser.add_argument('--killed', type=int, default=5,
                         help='client processes killed in the middle of a spawn (default 5)')
+    parser.add_argument('--storm-seconds', type=float, default=60.0,
+                        help='wall time the clients call during the sensor storm (default 60)')
+    parser.add_argument('--storm-robots', type=positive_int, default=3,
+                        help='robots with the largest sensors in the storm (default 3)')
+    parser.add_argument('--storm-p99-limit', type=float, default=STORM_P99_TARGET,
+                        help='p99 answer time during the storm above which it fails, in s '
+                             f'(default {STORM_P99_TARGET:g}, the target)')
     parser.add_argument('--real-time-factor', type=float, default=0.0,
                         help='of the world node: 0 runs flat out, 1 is real time (default 0)')
     return parser.parse_args(argv)
@@ -524,18 +815,28 @@ def main(argv=None):
         models = {name: read_model(name) for name in ('r2d2', 'tinybot')}
         print(f'world pid {world.pid}, ROS domain {domain_id}, its log {log.name} (kept if '
               'anything fails)', flush=True)
-        same_name_phase(clients, tally, models)
-        print('same name done', flush=True)
-        mixed_problems, figures['mixed_models'] = mixed_phase(clients, tally, models,
-                                                              arguments.seconds, world)
-        problems += mixed_problems
-        print('mixed done', flush=True)
-        figures['killed'] = arguments.killed
-        figures['arrived'] = len(killed_client_phase(clients[0], tally, models, world,
-                                                     arguments.killed))
-        print('killed clients done', flush=True)
-        figures.update(cycles_phase(clients[0], tally, models, world.pid, arguments.cycles))
-        problems += drift_problems(figures)
+        phases = arguments.phases
+        if 'same-name' in phases:
+            same_name_phase(clients, tally, models)
+            print('same name done', flush=True)
+        if 'mixed' in phases:
+            mixed_problems, figures['mixed_models'] = mixed_phase(clients, tally, models,
+                                                                  arguments.seconds, world)
+            problems += mixed_problems
+            print('mixed done', flush=True)
+        if 'killed' in phases:
+            figures['killed'] = arguments.killed
+            figures['arrived'] = len(killed_client_phase(clients[0], tally, models, world,
+                                                         arguments.killed))
+            print('killed clients done', flush=True)
+        if 'cycles' in phases:
+            figures.update(cycles_phase(clients[0], tally, models, world.pid, arguments.cycles))
+            problems += drift_problems(figures)
+            print('cycles done', flush=True)
+        if 'storm' in phases:
+            figures['storm'] = storm_phase(clients, tally, models, arguments, world)
+            problems += figures['storm']['problems']
+            print('sensor storm done', flush=True)
         if clients[0].models() != ['tinybot']:
             problems.append(f'the world ends with {clients[0].models()}, not tinybot alone')
     except RuntimeError as error:
@@ -556,7 +857,7 @@ def main(argv=None):
     internal = [line.strip() for line in log if 'internal error' in line or 'Traceback' in line]
     if internal:
         problems.append(f'the world logged {len(internal)} internal errors, e.g. {internal[0]}')
-    print_summary(tally, figures, problems, arguments.seconds, arguments.clients)
+    print_summary(tally, figures, problems, arguments)
     passed = not problems and not tally.failures()
     log.close()
     if passed:

@@ -633,8 +633,12 @@ class TestTurningService:
 
 def test_short_stress_run_answers_every_call_and_loses_nothing():
     """Run scripts/stress briefly: same-name, mixed, killed-client and spawn/delete phases."""
+    # The sensor storm is left out: it judges the world's answer times and /clock while the
+    # largest sensors are listened to, a figure of full runs (issue 26) that a machine busy
+    # with the rest of the suite does not give.
     result = subprocess.run(
-        [sys.executable, STRESS, '--seconds', '2', '--cycles', '20', '--clients', '4',
-         '--killed', '1'], capture_output=True, text=True, timeout=180)
+        [sys.executable, STRESS, '--phases', 'same-name,mixed,killed,cycles', '--seconds', '2',
+         '--cycles', '20', '--clients', '4', '--killed', '1'],
+        capture_output=True, text=True, timeout=180)
     assert result.returncode == 0, result.stdout + result.stderr
     assert result.stdout.rstrip().endswith('PASS')
