@@ -62,6 +62,24 @@ class RosHarness:
         self._spinning.append((node, executor, thread))
         return node
 
+    def destroy(self, entity):
+        """
+        Destroy a subscription, publisher or client of the client node, on its executor's thread.
+
+        Destroyed from the test's thread, an entity with event handlers can be taken apart while
+        the executor puts it in its wait set, which kills the executor (rclpy's InvalidHandle):
+        the client node then hears nothing more.
+        """
+        from rclpy.client import Client
+        from rclpy.publisher import Publisher
+        from rclpy.subscription import Subscription
+        node, executor, _ = self._spinning[0]
+        destroy = {Subscription: node.destroy_subscription, Publisher: node.destroy_publisher,
+                   Client: node.destroy_client}[type(entity)]
+        task = executor.create_task(destroy, entity)
+        assert self.wait_for(task.done, timeout=10.0), 'the client node did not destroy it'
+        task.result()
+
     def action_client(self, action_type, action_name):
         """Make an action client on the client node; it is destroyed after the test."""
         from rclpy.action import ActionClient
@@ -80,7 +98,7 @@ class RosHarness:
                 f'service {service_name} did not answer within {timeout} s'
             return future.result()
         finally:
-            self.client_node.destroy_client(client)
+            self.destroy(client)
 
     def subscribe(self, msg_type, topic, *, depth=100):
         """Collect every message on a topic into a list that grows while the test runs."""
@@ -97,7 +115,7 @@ class RosHarness:
             assert self.wait_for(lambda: len(received) >= count, timeout=timeout), \
                 f'{len(received)} of {count} messages on {topic} within {timeout} s'
         finally:
-            self.client_node.destroy_subscription(subscription)
+            self.destroy(subscription)
         return received
 
     def set_parameter(self, node_name, name, value):

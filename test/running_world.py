@@ -137,4 +137,4 @@ class RunningWorld:
             publisher.publish(Twist())
         self.wait_sim(0.5)
         for publisher in publishers.values():
-            node.destroy_publisher(publisher)
+            self.ros.destroy(publisher)

@@ -153,7 +153,7 @@ def turn_for(world, ros, name, topic, angular_z, duration):
     publisher.publish(Twist())
     (before, turned_before), (after, turned_after) = samples[-2:]
     settle(world, name)
-    ros.client_node.destroy_publisher(publisher)
+    ros.destroy(publisher)
     start = samples[0][0]
     print(f'\n{len(samples) - 1} states over the turn, the last two at {before - start:.3f} and '
           f'{after - start:.3f} s: {turned_before:.4f} and {turned_after:.4f} rad')

@@ -64,7 +64,7 @@ def test_free_running_a_sensor_is_held_to_its_rate_in_wall_time_too(ros):
         wall = time.monotonic() - start
         count = len(scans) - first
     finally:
-        ros.client_node.destroy_subscription(subscription)
+        ros.destroy(subscription)
     # 10 Hz of simulation time would be 200 scans; held to 10 per wall second, far fewer.
     assert count <= 10.0 * wall + 2, f'{count} scans in {wall:.2f} s of wall time'
     stamps = [seconds(msg.header.stamp) for msg in scans]
@@ -121,7 +121,7 @@ def test_the_default_tinybots_ros2_camera_renders_at_its_rate_only_while_watched
     assert list(infos[-1].k) == pytest.approx([focal, 0, 159.5, 0, focal, 119.5, 0, 0, 1])
     assert infos[-1].header.frame_id == 'camera_link'
     # Nobody watches any more: the camera stops rendering.
-    ros.client_node.destroy_subscription(info_subscription)
+    ros.destroy(info_subscription)
     assert_stops(world, camera)
 
 

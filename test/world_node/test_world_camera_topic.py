@@ -88,7 +88,7 @@ def test_enabled_camera_renders_only_for_a_subscriber(ros):
     images = []
     subscription = ros.client_node.create_subscription(Image, IMAGE_TOPIC, images.append, 10)
     assert ros.wait_for(lambda: len(images) >= 2, timeout=10.0)
-    ros.client_node.destroy_subscription(subscription)
+    ros.destroy(subscription)
     assert ros.wait_for(lambda: world.node.camera_stream.next_due == math.inf, timeout=5.0)
 
 

@@ -63,7 +63,7 @@ def test_a_late_subscriber_gets_the_time_within_a_second_while_paused(ros):
             f'no /clock within 1 s for a {qos.durability.name} subscriber'
         wall, sim = received[0]
         assert wall - start <= 1.0 and sim == pytest.approx(paused_at, abs=1e-9)
-        ros.client_node.destroy_subscription(subscription)
+        ros.destroy(subscription)
 
 
 def test_a_node_on_sim_time_started_during_a_pause_learns_the_time(ros):
