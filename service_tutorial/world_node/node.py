@@ -6,14 +6,14 @@ It steps a service_tutorial.sim.world.World, serves the world services under /mu
 publishes /clock; each model's own topics (cmd_vel, odom and joint_states of a diff drive, its
 odometry on /tf) come from the faces of its ModelInterface, named when the model is spawned
 and made as soon as the spawn is answered, and a model with topics also gets its URDF on
-robot_description. A Pacer decides how far each
-tick steps and which streams are due. Stepping runs in a timer of the node's default callback
-group, so a service callback, a parameter change and a physics step never run at the same time
-and no locks are needed. Each tick first takes the velocity commands that came since the last
-one: they never wake the executor (taken_at_tick.py). A paused world steps only when a client
-asks for N steps (requested_steps.py): the timer takes them, a share of every tick, while the
-client's call waits in a callback group of its own. A model the world removes by itself,
-because it kept breaking the physics (sim/recovery.py), is announced on ~/removed_models.
+robot_description. A Pacer decides how far each tick steps and which streams are due. Stepping
+runs in a timer of the node's default callback group, so a service callback, a parameter change
+and a physics step never run at the same time and no locks are needed. Each tick first takes
+the velocity commands that came since the last one: they never wake the executor
+(taken_at_tick.py). A paused world steps only when a client asks for N steps
+(requested_steps.py): the timer takes them, a share of every tick, while the client's call
+waits in a callback group of its own. A model the world removes by itself, because it kept
+breaking the physics (sim/recovery.py), is announced on ~/removed_models.
 
 The parameters are declared in parameters.py, and every one that is not read-only takes
 effect as soon as it is set. What the simulation logs reaches the node's logger (and /rosout).

@@ -53,21 +53,27 @@ class DriveFace(PluginFace):
         self.model = model
         self.drive = plugin
         config, block = plugin.config, plugin.block
-        cmd_vel_topic, odom_topic, joint_states_topic = (
+        self.cmd_vel_topic, odom_topic, joint_states_topic = (
             plugin_topic(block, topic, robot_namespace=namespace, ros1_tag=ros1_tag)
             for topic, ros1_tag in (('cmd_vel', 'commandTopic'), ('odom', 'odometryTopic'),
                                     ('joint_states', None)))
-        self.topics = (cmd_vel_topic,
-                       *((odom_topic,) if config.publish_odom else ()),
-                       *((joint_states_topic,) if publishes_joint_states(plugin) else ()))
+        # None: the block asks for no such topic (its name was still checked).
+        self.odom_topic = odom_topic if config.publish_odom else None
+        self.joint_states_topic = joint_states_topic if publishes_joint_states(plugin) else None
         self.encoder_odometry = config.odometry_source == ODOMETRY_SOURCE_ENCODER
         self.cmd_vel_sub = self.odom_pub = self.joint_states_pub = None
         self._publishers = {}  # stream -> (publish(now), SubscriberWatch of its topic)
         self.odom_msg = self.joint_states_msg = None
 
+    @property
+    def topics(self):
+        """Return the names of the topics the drive makes: cmd_vel, odom, joint_states."""
+        return tuple(topic for topic in (self.cmd_vel_topic, self.odom_topic,
+                                         self.joint_states_topic) if topic is not None)
+
     def make_topics(self):
         """Make the drive's topics: cmd_vel, and odom and joint_states as the block asks."""
-        node, topics, config = self.node, iter(self.topics), self.drive.config
+        node, config = self.node, self.drive.config
         # Filled in and published again every time: publish() copies the message.
         self.odom_msg = Odometry()
         if config.covariance is not None:
@@ -81,16 +87,16 @@ class DriveFace(PluginFace):
         # turn, and 50 robots' 400 were most of the world's CPU at real time. The node takes
         # the commands at each tick (take_commands), so they never wake its executor.
         self.cmd_vel_sub = node.create_subscription(
-            Twist, next(topics), self.cmd_vel_callback, 10, callback_group=TakenAtTick(),
+            Twist, self.cmd_vel_topic, self.cmd_vel_callback, 10, callback_group=TakenAtTick(),
             event_callbacks=SubscriptionEventCallbacks(use_default_callbacks=False))
         quiet = PublisherEventCallbacks(use_default_callbacks=False)
-        if config.publish_odom:
-            self.odom_pub = node.create_publisher(Odometry, next(topics), 10,
+        if self.odom_topic is not None:
+            self.odom_pub = node.create_publisher(Odometry, self.odom_topic, 10,
                                                   event_callbacks=quiet)
             self._publishers[ODOMETRY_STREAM] = (self.publish_odometry,
                                                  SubscriberWatch(self.odom_pub))
-        if publishes_joint_states(self.drive):
-            self.joint_states_pub = node.create_publisher(JointState, next(topics), 10,
+        if self.joint_states_topic is not None:
+            self.joint_states_pub = node.create_publisher(JointState, self.joint_states_topic, 10,
                                                           event_callbacks=quiet)
             self._publishers[JOINT_STATES_STREAM] = (self.publish_joint_states,
                                                      SubscriberWatch(self.joint_states_pub))

@@ -3,11 +3,11 @@ What the world node asks of the ROS face of one plugin: the protocol every face 
 
 A face gives one plugin of a model its topics. The world node makes the faces of a model when
 the model is spawned (model_interface.ModelInterface): each works out its topics' names then,
-so that a bad one refuses the spawn, and makes them in make_topics(), once the spawn is answered.
-From then on the node hands each face, at each tick, what
-concerns it: the publication streams that fell due (publish), the commands that came since the
-last tick (take_commands, for a face that declares takes_commands), and a look for subscribers
-once a watcher's next_look comes. Faces inherit the defaults written here, so each says only
+so that a bad one refuses the spawn, and makes them in make_topics(), once the spawn is
+answered. From then on the node hands each face, at each tick, what concerns it: the
+publication streams that fell due (publish), the commands that came since the last tick
+(take_commands, for a face that declares takes_commands), and a look for subscribers once a
+watcher's next_look comes. Faces inherit the defaults written here, so each says only
 what it does.
 """
 
