@@ -35,12 +35,11 @@ def prefer_headless_gl():
             return
 
 
-def release_gl_context(renderer):
-    """Leave the renderer's GL context current in no thread, so any thread can use it next."""
-    # A GL context can be current in one thread at a time, and mujoco.Renderer leaves its own
-    # current in the thread that made or last used it: a node destroyed from another thread
-    # could not free it. EGL (headless) and GLFW (with a display) are the backends used here.
-    context = getattr(renderer, '_gl_context', None)
+def release_gl_context(context):
+    """Leave a GL context current in no thread, so any thread can use it next."""
+    # A GL context can be current in one thread at a time, and stays current in the thread
+    # that made or last used it: a node destroyed from another thread could not free it.
+    # EGL (headless) and GLFW (with a display) are the backends used here.
     egl = sys.modules.get('mujoco.egl')
     glfw = sys.modules.get('mujoco.glfw')
     if egl is not None and isinstance(context, egl.GLContext):
@@ -62,12 +61,143 @@ def pinhole_matrix(width, height, fovy):
                      [0.0, 0.0, 1.0]])
 
 
+# Robots' cameras and pictures are drawn with a shadow map this many texels a side: MuJoCo's
+# default of 4096 takes 60 ms more to make for every new model, for shadows no image here shows.
+SHADOW_SIZE = 1024
+# Offscreen buffers up to this many pixels are multisampled (antialiased). A larger one takes
+# a quarter of a second to make for every new model, holding the GIL, so it is drawn without.
+MULTISAMPLED_PIXELS = 1024 * 1024
+
+
+def _gl_context_class():
+    """Return the GLContext class of the GL backend MuJoCo picked last (see prefer_headless_gl)."""
+    for name in ('mujoco.rendering.classic.gl_context', 'mujoco.gl_context'):
+        try:
+            return importlib.import_module(name).GLContext
+        except (ImportError, AttributeError):
+            continue
+    raise RuntimeError('this MuJoCo has no GL context to render offscreen with')
+
+
+class SceneSnapshot:
+    """A model's scene as one camera sees it, copied to be drawn later, maybe on another thread."""
+
+    def __init__(self):
+        self.model = None  # the model the scene was copied from
+        self.scene = None
+        self._option = mujoco.MjvOption()
+
+    def take(self, model, data, camera, fovy, near, far):
+        """
+        Copy the scene as the camera sees it; quick, and on the thread that steps model and data.
+
+        camera is a mujoco.MjvCamera or the id of a camera of the model; fovy is the vertical
+        field of view in degrees, near and far the clipping distances in metres.
+        """
+        if model is not self.model:
+            # Room for every geom and site twice over, and MuJoCo's decorations: a few
+            # milliseconds to make, where MuJoCo's default of 10,000 geoms takes 35.
+            capacity = 2 * (model.ngeom + model.nsite + model.ntendon + model.nflex) + 100
+            self.scene = mujoco.MjvScene(model, maxgeom=capacity)
+            self.model = model
+        if not isinstance(camera, mujoco.MjvCamera):
+            fixed = mujoco.MjvCamera()
+            fixed.type = mujoco.mjtCamera.mjCAMERA_FIXED
+            fixed.fixedcamid = int(camera)
+            camera = fixed
+        mujoco.mjv_updateScene(model, data, self._option, None, camera,
+                               mujoco.mjtCatBit.mjCAT_ALL, self.scene)
+        # MuJoCo takes the field of view and the clipping distances from the model (a free
+        # camera's scale with the model's extent, which changes with every spawn); use ours.
+        for eye in self.scene.camera:
+            eye.frustum_near, eye.frustum_far = near, far
+            half_height = near * math.tan(math.radians(fovy) / 2.0)
+            eye.frustum_top, eye.frustum_bottom = half_height, -half_height
+            eye.frustum_center = 0.0
+            eye.frustum_width = 0.0  # 0: from the image's aspect ratio
+
+
+class Drawing:
+    """
+    One GL context that draws scene snapshots of any size, on whichever thread calls it.
+
+    The GL context is made on first use and kept; MuJoCo's rendering context (the model's
+    meshes and textures, offscreen buffers as large as the largest image asked for) is made
+    again for each new model. Several cameras can share one Drawing, one at a time.
+    """
+
+    def __init__(self):
+        self._gl_context = None
+        self._context = None
+        self._model = None  # the world's model the rendering context was made for
+        self._buffer = (0, 0)  # its offscreen buffer's width and height
+
+    def draw(self, snapshot, width, height):
+        """Draw a SceneSnapshot as an (height, width, 3) uint8 RGB image."""
+        self.make_gl_context()
+        self._gl_context.make_current()
+        try:
+            if snapshot.model is not self._model or width > self._buffer[0] or \
+                    height > self._buffer[1]:
+                self._make_context(snapshot.model, width, height)
+            rect = mujoco.MjrRect(0, 0, width, height)
+            mujoco.mjr_setBuffer(mujoco.mjtFramebuffer.mjFB_OFFSCREEN, self._context)
+            mujoco.mjr_render(rect, snapshot.scene, self._context)
+            pixels = np.empty((height, width, 3), dtype=np.uint8)
+            mujoco.mjr_readPixels(pixels, None, rect, self._context)
+            return np.ascontiguousarray(pixels[::-1])  # GL's rows go bottom up
+        finally:
+            release_gl_context(self._gl_context)
+
+    def make_gl_context(self):
+        """Make the GL context, if not made yet, and leave it current in no thread."""
+        # With a display, GLFW makes a hidden window: make it on the thread that starts the
+        # world, as the world's other windows are, before drawing on the rendering thread.
+        if self._gl_context is None:
+            prefer_headless_gl()
+            self._gl_context = _gl_context_class()(1, 1)  # draws offscreen, in any size
+            release_gl_context(self._gl_context)
+
+    def _make_context(self, model, width, height):
+        """Make the rendering context for a new model, or for a larger image."""
+        if self._context is not None:
+            self._context.free()
+            self._context = None
+        visual = model.vis.global_
+        buffer = (max(self._buffer[0], width, visual.offwidth),
+                  max(self._buffer[1], height, visual.offheight))
+        # The buffer's size and the shadows' come from the model; a copy with ours leaves the
+        # world's model as it is.
+        render_model = copy.copy(model)
+        render_model.vis.global_.offwidth, render_model.vis.global_.offheight = buffer
+        render_model.vis.quality.shadowsize = min(model.vis.quality.shadowsize, SHADOW_SIZE)
+        if buffer[0] * buffer[1] > MULTISAMPLED_PIXELS:
+            render_model.vis.quality.offsamples = 0
+        self._context = mujoco.MjrContext(render_model, mujoco.mjtFontScale.mjFONTSCALE_150)
+        self._model, self._buffer = model, buffer
+
+    def close(self):
+        """Free the rendering and GL contexts, from any thread; the next draw makes new ones."""
+        if self._gl_context is None:
+            return
+        if self._context is not None:
+            self._gl_context.make_current()
+            self._context.free()
+            release_gl_context(self._gl_context)
+        self._gl_context.free()
+        self._gl_context = None
+        self._context = None
+        self._model = None
+        self._buffer = (0, 0)
+
+
 class OffscreenCamera:
     """
     Renders a model's scene offscreen into RGB images of one size, from any camera.
 
-    The mujoco.Renderer and its GL context are made on first use, and made again for each new
-    model (every spawn and delete compiles a new one).
+    A snapshot of the scene is taken on the thread that steps the model, and drawn by a
+    Drawing: the camera's own, made on first use, or one it is given (shared by the world's
+    cameras on its rendering thread).
     """
 
     def __init__(self, width, height):
@@ -75,67 +205,37 @@ class OffscreenCamera:
             raise ValueError(f'camera size must be positive, got {width}x{height}')
         self.width = int(width)
         self.height = int(height)
-        self._renderer = None
-        self._scene_model = None  # the world's model the renderer was made for
+        self.snapshot = SceneSnapshot()
+        self.drawing = None  # the camera's own Drawing, once it drew with it
 
     def render_view(self, model, data, camera, fovy, near, far):
         """
         Render the scene from a camera as an (height, width, 3) uint8 RGB image.
 
-        camera is a mujoco.MjvCamera or the id or name of a camera of the model; fovy is the
-        vertical field of view in degrees, near and far the clipping distances in metres.
+        camera is a mujoco.MjvCamera or the id of a camera of the model; fovy is the vertical
+        field of view in degrees, near and far the clipping distances in metres.
         """
         self.take_snapshot(model, data, camera, fovy, near, far)
         return self.render_snapshot()
 
     def take_snapshot(self, model, data, camera, fovy, near, far):
-        """
-        Copy the scene as render_view() would see it; render_snapshot() draws it later.
+        """Copy the scene as render_view() would see it; render_snapshot() draws it later."""
+        self.snapshot.take(model, data, camera, fovy, near, far)
 
-        The copy is quick and reads the model and data, so it belongs on the thread that steps
-        them; drawing it may happen on another thread, before the next snapshot is taken.
-        """
-        if model is not self._scene_model:
-            self._make_renderer(model)
-        self._renderer.update_scene(data, camera)
-        # MuJoCo takes the field of view and the clipping distances from the model (a free
-        # camera's scale with the model's extent, which changes with every spawn); use ours.
-        for eye in self._renderer.scene.camera:
-            eye.frustum_near, eye.frustum_far = near, far
-            half_height = near * math.tan(math.radians(fovy) / 2.0)
-            eye.frustum_top, eye.frustum_bottom = half_height, -half_height
-            eye.frustum_center = 0.0
-            eye.frustum_width = 0.0  # 0: from the image's aspect ratio
-
-    def render_snapshot(self):
-        """Draw the last snapshot as an (height, width, 3) uint8 RGB image, on any thread."""
-        try:
-            return self._renderer.render()
-        finally:
-            release_gl_context(self._renderer)
-
-    def _make_renderer(self, model):
-        """Create the offscreen renderer, and its GL context, for a new model."""
-        self.close()
-        prefer_headless_gl()
-        render_model = model
-        visual = model.vis.global_
-        if visual.offwidth < self.width or visual.offheight < self.height:
-            # The offscreen buffer's size comes from the model; a copy with a bigger one
-            # leaves the world's model as it is.
-            render_model = copy.copy(model)
-            render_model.vis.global_.offwidth = max(visual.offwidth, self.width)
-            render_model.vis.global_.offheight = max(visual.offheight, self.height)
-        self._renderer = mujoco.Renderer(render_model, self.height, self.width)
-        release_gl_context(self._renderer)
-        self._scene_model = model
+    def render_snapshot(self, drawing=None):
+        """Draw the last snapshot with a Drawing (the camera's own by default), on any thread."""
+        if drawing is None:
+            if self.drawing is None:
+                self.drawing = Drawing()
+            drawing = self.drawing
+        return drawing.draw(self.snapshot, self.width, self.height)
 
     def close(self):
-        """Release the renderer and its GL context; the next render makes new ones."""
-        if self._renderer is not None:
-            self._renderer.close()
-        self._renderer = None
-        self._scene_model = None
+        """Release the camera's own Drawing and its GL context; the next render makes new ones."""
+        if self.drawing is not None:
+            self.drawing.close()
+        self.drawing = None
+        self.snapshot = SceneSnapshot()
 
 
 class SceneCamera(OffscreenCamera):

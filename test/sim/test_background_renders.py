@@ -32,10 +32,10 @@ def test_the_steps_go_on_while_a_frame_is_drawn_and_it_comes_stamped_with_its_sn
     drawing, go_on = threading.Event(), threading.Event()
     draw = camera._view.render_snapshot
 
-    def held_draw():
+    def held_draw(shared_drawing=None):
         drawing.set()
         assert go_on.wait(30.0)
-        return draw()
+        return draw(shared_drawing)
     camera._view.render_snapshot = held_draw
     frames = []
     camera.listener = lambda sensor: frames.append((sensor.reading_time, sensor.image))
@@ -89,4 +89,46 @@ def test_a_frame_of_a_camera_nobody_listens_to_any_more_is_dropped():
         assert frames == [] and camera.image is None
     finally:
         camera.close()
+        world.background_renders.close()
+
+
+def test_cameras_of_two_sizes_share_the_rendering_thread_and_see_each_new_model():
+    world = World(background_rendering=True)
+    world.spawn_urdf_file('small_post', CAMERA_ROBOT)
+    with open(CAMERA_ROBOT) as robot_file:
+        larger = robot_file.read().replace('<width>160</width>', '<width>640</width>') \
+            .replace('<height>120</height>', '<height>480</height>')
+    world.spawn_urdf('large_post', larger, position=(0.0, 0.0, 0.0))
+    cameras = [world.models[name].plugin(CameraSensor) for name in ('small_post', 'large_post')]
+    frames = {camera: [] for camera in cameras}
+    for camera in cameras:
+        camera.listener = lambda sensor: frames[sensor].append(sensor.image)
+
+    def centre_is_red():
+        """Take one frame of each camera; tell, for each, whether its centre is red."""
+        for camera in cameras:
+            frames[camera].clear()
+        world.step(round(0.1 / world.timestep) + 1)
+        assert delivered(world, frames[cameras[0]], 1) and delivered(world, frames[cameras[1]], 1)
+        reds = []
+        for camera in cameras:
+            image = frames[camera][-1]
+            assert image.shape == (camera.config.height, camera.config.width, 3)
+            red, green, blue = (int(value) for value in image[image.shape[0] // 2,
+                                                              image.shape[1] // 2])
+            reds.append(red > 2 * green and red > 2 * blue)
+        return reds
+
+    try:
+        for camera in cameras:
+            camera.set_active(True)
+        assert centre_is_red() == [False, False]
+        # Each spawn and delete compiles a new model; both cameras draw it at their own size.
+        world.spawn_urdf_file('box', RED_BOX, position=(1.5, 0.0, 0.0))
+        assert centre_is_red() == [True, True]
+        world.delete_model('box')
+        assert centre_is_red() == [False, False]
+    finally:
+        for camera in cameras:
+            camera.close()
         world.background_renders.close()

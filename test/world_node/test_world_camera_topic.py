@@ -74,7 +74,7 @@ def test_disabled_camera_has_no_topic_and_renders_nothing(ros):
     assert world.node.count_publishers(IMAGE_TOPIC) == 0
     assert world.node.count_publishers(INFO_TOPIC) == 0
     assert images == []
-    assert world.node.camera_stream.camera._renderer is None
+    assert world.node.camera_stream.camera.drawing is None
 
 
 def test_enabled_camera_renders_only_for_a_subscriber(ros):
@@ -82,7 +82,7 @@ def test_enabled_camera_renders_only_for_a_subscriber(ros):
                             camera_height=HEIGHT)
     assert ros.wait_for(lambda: world.node.count_publishers(IMAGE_TOPIC) == 1, timeout=5.0)
     world.wait_sim(0.5)  # ten frames, had anyone listened
-    assert world.node.camera_stream.camera._renderer is None, 'rendered with nobody listening'
+    assert world.node.camera_stream.camera.drawing is None, 'rendered with nobody listening'
     assert world.node.camera_stream.next_due == math.inf, 'stepping still stops for the camera'
     # A subscriber comes and goes: frames flow, then the camera goes quiet again.
     images = []

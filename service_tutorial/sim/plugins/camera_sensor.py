@@ -165,9 +165,9 @@ class CameraSensor(Sensor):
         self._view.take_snapshot(self.world.model, self.world.data, self._camera_id,
                                  config.fovy, config.near, config.far)
 
-    def _drawn(self):
-        """Draw the last snapshot in the block's encoding."""
-        pixels = self._view.render_snapshot()
+    def _drawn(self, drawing=None):
+        """Draw the last snapshot in the block's encoding (with the camera's own Drawing)."""
+        pixels = self._view.render_snapshot(drawing)
         encoding = self.config.encoding
         if encoding == 'bgr8':
             pixels = np.ascontiguousarray(pixels[:, :, ::-1])
