@@ -221,6 +221,8 @@ class MujocoWorld(Node):
     def step_callback(self):
         """Advance the physics as the pacer says, publishing what falls due on the way."""
         world, pacer = self.world, self.pacer
+        if pacer.resting():  # calls waiting are answered first
+            return
         pacer.start_tick()
         self.make_model_topics()
         for model in self.models.values():

@@ -25,6 +25,12 @@ every PAUSED_CLOCK_PERIOD of wall time (repeat_due), so that a late joiner learn
 A paused world steps only on request (StepSimulation): a tick then steps as free-running does,
 up to the count asked for (step_on_request, requested_chunks).
 
+A tick that ran past MAX_STEP_BUDGET (one step already took longer: sensors that cast or publish
+a lot at every step, frames of a large camera handed on) is followed by a rest as long as the tick
+(MAX_REST at most): the node does not step until it ends (resting), so the executor answers every
+call waiting, one after the other, before the next tick; otherwise it answers one call of each
+service between two ticks. Such a world gives its services at least half of its thread's time.
+
 While a spawn or a delete keeps the world busy, simulation time stands still (hold), as in
 Gazebo; the world does not run fast afterwards to make up for it.
 
@@ -54,6 +60,8 @@ PAUSED_TICK_PERIOD = 0.02
 PAUSED_CLOCK_PERIOD = 0.1
 # Further behind real time than this (s), the machine cannot keep up: do not try to catch up.
 MAX_LAG = 0.1
+# The longest rest after a tick that ran past its budget, in s of wall time.
+MAX_REST = 0.2
 # Spawns and deletes may put the next tick off (see hold), but not for longer than this (s).
 MAX_DEFERRAL = 0.1
 NANOSECONDS = 1_000_000_000
@@ -78,6 +86,7 @@ class Pacer:
         self.executor_turn = 0.0  # running estimate of the CPU time between two ticks
         self._tick_end_cpu = None
         self._tick_started = 0.0  # wall time
+        self._rest_until = 0.0  # wall time
         self._wall_anchor = wall_clock()
         self._sim_anchor = 0.0
         self._next_repeat = 0.0
@@ -148,8 +157,15 @@ class Pacer:
                                               1.05 * self.executor_turn + 1e-6))
 
     def end_tick(self):
-        """Note when a tick ended, in CPU time."""
+        """Note when a tick ended, in CPU time, and rest after a tick that ran past its budget."""
         self._tick_end_cpu = self._cpu_clock()
+        wall = self._wall_clock()
+        took = wall - self._tick_started
+        self._rest_until = wall + min(took, MAX_REST) if took > MAX_STEP_BUDGET else 0.0
+
+    def resting(self):
+        """Tell whether the next tick must wait: the last one ran past its budget (end_tick)."""
+        return self._wall_clock() < self._rest_until
 
     def tick_period_ns(self, paused):
         """Return the step timer's period for the current state, in whole milliseconds."""

@@ -321,3 +321,30 @@ def test_steps_on_request_go_free_running_and_stop_at_the_count(real_time_factor
     assert requested_tick(7) == 7 and world.steps == before + 7
     # Done, the pace is the real-time factor's again.
     assert pacer.free_running is (real_time_factor == 0.0)
+
+
+def test_a_tick_past_its_budget_is_followed_by_as_long_a_rest_for_the_calls_waiting():
+    # 120 ms a step: a tick takes one step, far past its budget.
+    pacer, world, wall, _ = make(0.0, step_cost=0.12)
+    pacer.start_tick()
+    world.tick()
+    pacer.end_tick()
+    assert world.steps == 1
+    assert pacer.resting()
+    wall.now += 0.119
+    assert pacer.resting()
+    wall.now += 0.002
+    assert not pacer.resting()
+    # A tick within its budget is not followed by a rest.
+    world.step_cost = 0.001
+    pacer.start_tick()
+    world.tick()
+    pacer.end_tick()
+    assert world.steps > 1 and not pacer.resting()
+    # However long a tick, the rest lasts MAX_REST at most.
+    world.step_cost = 1.0
+    pacer.start_tick()
+    world.tick()
+    pacer.end_tick()
+    wall.now += pacing.MAX_REST + 1e-6
+    assert not pacer.resting()
