@@ -6,6 +6,7 @@ MuJoCo orders a quaternion (w, x, y, z); geometry_msgs/Quaternion is written (x,
 command lines and in ROS tools. Every function here says which order it takes or gives.
 """
 
+import array
 import math
 
 from builtin_interfaces.msg import Time
@@ -97,3 +98,14 @@ def fill_twist_msg(twist, linear, angular):
     twist.linear.x, twist.linear.y, twist.linear.z = (float(v) for v in linear)
     twist.angular.x, twist.angular.y, twist.angular.z = (float(v) for v in angular)
     return twist
+
+
+def pixel_bytes(pixels):
+    """
+    Return an image's pixels (a contiguous numpy array) as a sensor_msgs/Image's data.
+
+    The message takes an array.array of bytes as it is; bytes it would copy once more.
+    """
+    data = array.array('B')
+    data.frombytes(pixels)
+    return data

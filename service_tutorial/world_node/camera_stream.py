@@ -18,7 +18,7 @@ import os
 
 import PIL.Image
 from sensor_msgs.msg import CameraInfo, Image
-from service_tutorial.conversions import time_msg
+from service_tutorial.conversions import pixel_bytes, time_msg
 from service_tutorial.sim.rendering import SceneCamera
 from service_tutorial.world_node.subscribers import SubscriberWatch
 from std_srvs.srv import Trigger
@@ -120,7 +120,7 @@ class CameraStream:
         msg.encoding = 'rgb8'
         msg.is_bigendian = 0
         msg.step = 3 * msg.width
-        msg.data = pixels.tobytes()
+        msg.data = pixel_bytes(pixels)
         return msg
 
     def camera_info(self, now):

@@ -7,7 +7,7 @@ pair's right camera.
 """
 
 from sensor_msgs.msg import CameraInfo, Image
-from service_tutorial.conversions import fill_time_msg
+from service_tutorial.conversions import fill_time_msg, pixel_bytes
 from service_tutorial.sim.plugins.camera_sensor import CameraSensor
 from service_tutorial.sim.validation import quoted
 from service_tutorial.sim.validation import WorldError
@@ -63,7 +63,7 @@ class CameraFace(SensorFace, sensor_type=CameraSensor):
         if self.image_pub.get_subscription_count() > 0:
             msg = self.image_msg
             fill_time_msg(msg.header.stamp, stamp)
-            msg.data = sensor.image.tobytes()
+            msg.data = pixel_bytes(sensor.image)
             self.image_pub.publish(msg)
         if self.info_pub.get_subscription_count() > 0:
             fill_time_msg(self.info_msg.header.stamp, stamp)
