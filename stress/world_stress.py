@@ -65,6 +65,14 @@ CALM_SECONDS = 5.0
 SLOWEST_SHOWN = 5
 
 
+def client_qos():
+    """Return the QoS of the stress clients: rclpy's for services, with a deeper history."""
+    from rclpy.qos import qos_profile_services_default, QoSProfile
+    profile = QoSProfile(**{name: getattr(qos_profile_services_default, name) for name in (
+        'history', 'reliability', 'durability')}, depth=100)
+    return profile
+
+
 def world_command(real_time_factor):
     """Return the command line that starts the world node as users start it."""
     executable = shutil.which('mujoco_world')
@@ -131,7 +139,8 @@ class WorldClient:
         """Return the response of /mujoco/<service>, or None if it did not come in time."""
         client = self.clients.get(service)
         if client is None:
-            client = self.node.create_client(srv_type, '/mujoco/' + service)
+            client = self.node.create_client(srv_type, '/mujoco/' + service,
+                                             qos_profile=client_qos())
             if not client.wait_for_service(timeout_sec=timeout):
                 return None
             self.clients[service] = client

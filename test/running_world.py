@@ -109,12 +109,13 @@ class RunningWorld:
         return self.call(Empty, service, Empty.Request())
 
     def published_topics(self):
-        """Return the topics the world node publishes, once every spawned model's are made."""
+        """Return the topics the world publishes (its sensor node too), once all are made."""
         # The world makes a model's topics right after it answers the spawn.
         assert self.ros.wait_for(
             lambda: all(model.topics_made for model in list(self.node.models.values())),
             timeout=10.0), 'the world did not make the topics of its models'
-        return {publisher.topic_name for publisher in self.node.publishers}
+        publishers = list(self.node.publishers) + self.node.sensor_node.publishers
+        return {publisher.topic_name for publisher in publishers}
 
     def topics(self):
         """Return the topics the world node publishes or subscribes to, as published_topics."""

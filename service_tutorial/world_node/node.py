@@ -46,6 +46,7 @@ from service_tutorial.world_node.pacing import ODOMETRY_STREAM, Pacer
 from service_tutorial.world_node.parameters import declare_world_parameters, run_or_exit
 from service_tutorial.world_node.requested_steps import RequestedSteps
 from service_tutorial.world_node.ros_names import normalise_namespace
+from service_tutorial.world_node.sensor_node import SensorNode
 from service_tutorial.world_node.standard.features import FeatureService
 from service_tutorial.world_node.standard.simulation import SimulationServices
 from service_tutorial.world_node.standard.stepping import SteppingServices
@@ -148,6 +149,7 @@ class MujocoWorld(Node):
             Clock, '/clock', CLOCK_QOS,
             event_callbacks=PublisherEventCallbacks(use_default_callbacks=False))
         self.tf_batch = TransformBatch(self)  # /tf, for every drive's OdomTfFace
+        self.sensor_node = SensorNode(self)  # publishes the sensors' topics (sensor_node.py)
         # Each model the world removes by itself to save the others, with the reason.
         self.removed_models_pub = self.create_publisher(
             RemovedModel, '~/removed_models', REMOVED_MODELS_QOS)
@@ -406,6 +408,7 @@ class MujocoWorld(Node):
         self.forwarded_logs.stop()
         # An action server keeps the node's handle alive (and its /rosout) until destroyed.
         self.stepping_services.destroy()
+        self.sensor_node.destroy()
         return super().destroy_node()
 
 

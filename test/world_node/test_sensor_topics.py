@@ -150,3 +150,18 @@ def test_the_default_world_has_the_yard_as_scenery_not_as_a_model(ros):
     # Straight ahead, the yard's east wall 5 m away; every beam meets a wall or a crate.
     assert ranges[180] == pytest.approx(4.98, abs=0.05)
     assert np.isfinite(ranges).all()
+
+
+def test_sensor_topics_come_from_the_world_sensor_node_and_go_with_their_model(ros):
+    world = ros.start_world(scenery='')
+    world.spawn_or_fail('post', read_model('sensor_laser', TEST_MODELS), namespace='post')
+    assert '/post/scan' in world.published_topics()
+
+    def scan_publishers():
+        return [(info.node_namespace, info.node_name)
+                for info in ros.client_node.get_publishers_info_by_topic('/post/scan')]
+    # A node of its own, in a participant of its own, beside the world node 'mujoco'.
+    assert ros.wait_for(lambda: scan_publishers() == [('/', 'mujoco_sensors')])
+    assert ros.receive(LaserScan, '/post/scan', count=1)[0].header.frame_id == 'laser_frame'
+    assert world.delete('post').success
+    assert ros.wait_for(lambda: scan_publishers() == [])

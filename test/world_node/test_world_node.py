@@ -260,7 +260,8 @@ def test_a_model_deleted_before_its_topics_are_made_leaves_none_behind(rclpy_ses
     node = MujocoWorld(parameter_overrides=[Parameter('paused', value=True)])
     try:
         def topics():
-            return ({publisher.topic_name for publisher in node.publishers}
+            publishers = list(node.publishers) + node.sensor_node.publishers
+            return ({publisher.topic_name for publisher in publishers}
                     | {subscription.topic_name for subscription in node.subscriptions})
 
         identity = (1.0, 0.0, 0.0, 0.0)

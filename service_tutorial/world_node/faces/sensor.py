@@ -13,13 +13,14 @@ Free-running (real_time_factor 0, or a paused world's steps on request), a senso
 to its rate in wall time, as the world node holds every stream: far faster than real time, a
 5 Hz laser would otherwise cast and publish hundreds of scans per wall second. Topics land
 where gazebo_ros puts them (ros_names.plugin_topic); frames are the block's frameName (ROS 1)
-or frame_name (ROS 2), else the sensor's link.
+or frame_name (ROS 2), else the sensor's link. The topics are published by the world's sensor
+node (sensor_node.py), in a DDS participant of its own: large frames in flight do not hold up
+the world's answers.
 """
 
 import math
 import time
 
-from rclpy.event_handler import PublisherEventCallbacks
 from service_tutorial.world_node.faces.face import PluginFace
 from service_tutorial.world_node.subscribers import SubscriberWatch
 
@@ -63,11 +64,8 @@ class SensorFace(PluginFace):
         sensor.listener = self.reading_callback
 
     def publisher(self, msg_type, topic, depth):
-        """Make a publisher of one of the sensor's topics (in make_topics())."""
-        # Without rclpy's two default event handlers, a publisher costs the executor nothing.
-        publisher = self.node.create_publisher(
-            msg_type, topic, depth,
-            event_callbacks=PublisherEventCallbacks(use_default_callbacks=False))
+        """Make a publisher of one of the sensor's topics (in make_topics()) on the sensor node."""
+        publisher = self.node.sensor_node.create_publisher(msg_type, topic, depth)
         self.watch.add(publisher)
         return publisher
 
@@ -107,5 +105,5 @@ class SensorFace(PluginFace):
         self.sensor.listener = None
         self.sensor.set_active(False)
         for publisher in self.watch.publishers:
-            self.node.destroy_publisher(publisher)
+            self.node.sensor_node.destroy_publisher(publisher)
         self.watch = SubscriberWatch()
