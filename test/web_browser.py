@@ -63,6 +63,10 @@ class Browser:
         """Load the page and wait until its panel is there."""
         self.driver.get(address)
         self.button('Spawn R2-D2', timeout=timeout)
+        # viser's notice that WebGL runs in software (no GPU here) goes, as a person closes it.
+        for close in self.driver.find_elements('css selector',
+                                               '.mantine-Notification-closeButton'):
+            close.click()
 
     def button(self, label, *, timeout=10.0):
         """Return the page's button with this label, once it is there."""
