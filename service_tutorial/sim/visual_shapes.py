@@ -1,12 +1,13 @@
 """
-What the world looks like, for a viewer outside MuJoCo: each body's visual shapes as meshes.
+What the world looks like, for a viewer outside MuJoCo: its visual shapes as triangle meshes.
 
-A viewer asks visual_bodies(world) once after each spawn or delete (the world's compiled model
-is then a new object) and body_poses(world, ids) as often as it draws; both read the world's
+A viewer asks visual_shapes(world) once after each spawn or delete (the world's compiled model
+is then a new object) and shape_poses(world, ids) as often as it draws; both read the world's
 model and data through its accessors, on the thread that steps the world. Boxes, cylinders,
-capsules, spheres and ellipsoids become triangle meshes, meshes keep MuJoCo's own vertices, and
-each shape keeps its colour (its material's, if it has one) and its pose in its body. Collision
-shapes and planes are left out: the ground is the viewer's to draw.
+capsules, spheres and ellipsoids become triangle meshes (one array for all shapes of a kind and
+size, so that a viewer can draw a fleet's equal shapes as instances of one), meshes keep
+MuJoCo's own vertices, and each shape keeps its colour (its material's, if it has one).
+Collision shapes and planes are left out: the ground is the viewer's to draw.
 """
 
 from collections import namedtuple
@@ -18,10 +19,9 @@ from service_tutorial.sim.description import COLLISION_GROUP
 from service_tutorial.sim.validation import SCOPE_SEPARATOR
 import trimesh
 
-# One shape of a body: its triangles in its own frame, its colour, its pose in the body.
-VisualShape = namedtuple('VisualShape', 'vertices faces rgba position wxyz')
-# A body with at least one visual shape; model_name is '' for the scenery's bodies.
-VisualBody = namedtuple('VisualBody', 'body_id name model_name shapes')
+# One visual geom: its id, its model ('' for the scenery), its triangles in its own frame and
+# its colour.
+VisualShape = namedtuple('VisualShape', 'geom_id model_name vertices faces rgba')
 
 _GEOM = mujoco.mjtGeom
 # Sides of a round shape's mesh: smooth enough at a few metres, few enough for 50 robots.
@@ -44,8 +44,11 @@ def _primitive(kind, size):
     else:  # an ellipsoid: a unit sphere stretched along its three axes
         mesh = trimesh.creation.icosphere(subdivisions=2, radius=1.0)
         mesh.apply_scale(size)
-    return (np.asarray(mesh.vertices, dtype=np.float32),
-            np.asarray(mesh.faces, dtype=np.uint32))
+    vertices = np.array(mesh.vertices, dtype=np.float32)
+    faces = np.array(mesh.faces, dtype=np.uint32)
+    vertices.setflags(write=False)  # shared by every shape of this kind and size
+    faces.setflags(write=False)
+    return vertices, faces
 
 
 def _shape_mesh(mj_model, geom_id):
@@ -77,31 +80,37 @@ def model_of_body(body_name):
     return model_name if separator else ''
 
 
-def visual_bodies(world):
-    """Return a VisualBody for each body of the world with something to see, in id order."""
+def visual_shapes(world):
+    """Return a VisualShape for each geom of the world with something to see, in id order."""
     mj_model = world.model
-    shapes = {}
+    shapes = []
     for geom_id in range(mj_model.ngeom):
         if int(mj_model.geom_group[geom_id]) == COLLISION_GROUP:
             continue
-        mesh = _shape_mesh(mj_model, geom_id)
-        if mesh is None or _colour(mj_model, geom_id)[3] == 0.0:
+        mesh, rgba = _shape_mesh(mj_model, geom_id), _colour(mj_model, geom_id)
+        if mesh is None or rgba[3] == 0.0:
             continue
-        shapes.setdefault(int(mj_model.geom_bodyid[geom_id]), []).append(VisualShape(
-            mesh[0], mesh[1], _colour(mj_model, geom_id),
-            tuple(float(x) for x in mj_model.geom_pos[geom_id]),
-            tuple(float(x) for x in mj_model.geom_quat[geom_id])))
-    bodies = []
-    for body_id in sorted(shapes):
-        name = mj_model.body(body_id).name
-        bodies.append(VisualBody(body_id, name, model_of_body(name), tuple(shapes[body_id])))
-    return bodies
+        body_name = mj_model.body(int(mj_model.geom_bodyid[geom_id])).name
+        shapes.append(VisualShape(geom_id, model_of_body(body_name), mesh[0], mesh[1], rgba))
+    return shapes
 
 
-def body_poses(world, body_ids):
-    """Return copies of the bodies' world positions (n x 3) and orientations (n x 4, wxyz)."""
-    moving = [body_id for body_id in body_ids if body_id != 0]
-    if moving:
-        world.body_state(moving[0])  # brings the kinematics up to date after a move or a step
+def shape_poses(world, geom_ids):
+    """Return the geoms' world positions (n x 3) and orientations (n x 4, wxyz), as copies."""
+    mj_model = world.model
+    if mj_model.nbody > 1:
+        world.body_state(1)  # brings the kinematics up to date after a move or a step
     data = world.data
-    return data.xpos[body_ids].copy(), data.xquat[body_ids].copy()
+    body = data.xquat[mj_model.geom_bodyid[geom_ids]]
+    local = mj_model.geom_quat[geom_ids]
+    return data.geom_xpos[geom_ids].copy(), _multiply(body, local)
+
+
+def _multiply(first, second):
+    """Return the Hamilton products of two arrays of wxyz quaternions, row by row."""
+    w1, x1, y1, z1 = first.T
+    w2, x2, y2, z2 = second.T
+    return np.stack([w1 * w2 - x1 * x2 - y1 * y2 - z1 * z2,
+                     w1 * x2 + x1 * w2 + y1 * z2 - z1 * y2,
+                     w1 * y2 - x1 * z2 + y1 * w2 + z1 * x2,
+                     w1 * z2 + x1 * y2 - y1 * x2 + z1 * w2], axis=1)
