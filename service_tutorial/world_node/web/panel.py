@@ -70,15 +70,18 @@ class Panel:
 
     def spawn_clicked(self):
         """Spawn R2-D2 through the world's spawn service, where the lesson puts it."""
-        self._sent_or_dropped(self.client.spawn_r2d2(self.r2d2_urdf, self._model_answered))
+        self._sent_or_dropped(self.client.spawn_r2d2(self.r2d2_urdf,
+                                                     self._model_answered('spawn')))
 
     def delete_clicked(self):
         """Delete R2-D2 through the world's delete service."""
-        self._sent_or_dropped(self.client.delete_r2d2(self._model_answered))
+        self._sent_or_dropped(self.client.delete_r2d2(self._model_answered('delete')))
 
-    def _model_answered(self, response):
-        self.say(response.status_message if response is not None
-                 else self._not_there('spawn'))
+    def _model_answered(self, kind):
+        def answered(response):
+            self.say(response.status_message if response is not None
+                     else self._not_there(kind))
+        return answered
 
     def reset_clicked(self):
         """Reset the simulation through the world's reset service."""
