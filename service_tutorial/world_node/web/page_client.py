@@ -69,7 +69,7 @@ class PageClient:
 
     def service_name(self, kind):
         """Return the full name of the service a kind of call goes to."""
-        return self.clients[kind].srv_name
+        return self.node.resolve_service_name(self.clients[kind].srv_name)
 
     def call(self, kind, request, answered):
         """
