@@ -15,7 +15,7 @@ setup(
         ('share/' + package_name + '/config', glob('config/*.yaml') + glob('config/*.rviz')),
         ('share/' + package_name + '/launch', glob('launch/*.launch.py')),
     ],
-    install_requires=['setuptools', 'mujoco', 'yourdfpy', 'numpy', 'pillow', 'xacro'],
+    install_requires=['setuptools', 'mujoco', 'yourdfpy', 'numpy', 'pillow', 'xacro', 'viser'],
     zip_safe=True,
     maintainer='service_tutorial maintainers',
     maintainer_email='maintainers@service-tutorial.dev',

@@ -90,7 +90,7 @@ def machine():
 
 
 def targets(tables):
-    """Return the targets of issues 5, 15 and 24, their measured values, whether they hold."""
+    """Return the targets of issues 5, 15, 23 and 24, their measured values, whether they hold."""
     rows = []
     by_key = {table.key: table for table in tables}
     if 'round_trips' in by_key:
@@ -128,6 +128,9 @@ def targets(tables):
     if 'standard_interfaces' in by_key:
         for row in by_key['standard_interfaces'].rows:
             rows.append([f'{row[0]} (ms)', row[2], row[5], row[6]])
+    if 'web' in by_key:
+        for row in by_key['web'].rows:
+            rows.append([f'{row[0]} ratio, {row[1]} robot(s)', row[4], row[5], row[6]])
     return Table('targets', 'Targets', [('target', ''), ('measured', '.3f'), ('limit', '.3f'),
                                         ('holds', '')], rows)
 

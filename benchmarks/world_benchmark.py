@@ -17,7 +17,9 @@ as JSON (output/benchmark.json unless --json says otherwise). What runs where:
 - answers that need no simulation: model_services without a world, and robot_turning_server
   in this process;
 - the standard simulation interfaces (SpawnEntities, StepSimulation, GetEntitiesStates): the
-  world node in this process, paused, against MuJoCo's own batch, bare mj_step and the World.
+  world node in this process, paused, against MuJoCo's own batch, bare mj_step and the World;
+- the web page's cost: mujoco_world as a process with web:=false and web:=true, and with one
+  headless Chromium on its page.
 
 Run it with scripts/benchmark [--quick] [--json PATH].
 """
@@ -43,6 +45,7 @@ from speed import speed_tables
 from standard_interfaces import standard_table
 from startup import startup_table
 from turning import turning_tables
+from web_page import web_table
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 DEFAULT_JSON = os.path.join(ROOT, 'output', 'benchmark.json')
@@ -82,6 +85,9 @@ class Config:
     standard_steps: int = 10_000           # steps of one StepSimulation call
     standard_step_robots: int = 10         # driving tinybots stepped
     standard_calls: int = 100              # GetEntitiesStates round trips
+    web_rounds: int = 5                    # windows per case of the web page's rows
+    web_window: float = 3.0                # wall s per window of the web page's rows
+    web_robots: int = 50                   # tinybots of the row with a browser
     log_path: str = os.path.join(tempfile.gettempdir(), 'world_benchmark-nodes.log')
 
 
@@ -92,11 +98,12 @@ QUICK = Config(calls=5, growth_counts=(1, 2), growth_calls=3, robot_counts=(1,),
                core_spawns=3, cost_counts=(1, 2), cost_calls=3, box_count=5, step_rounds=2,
                step_count=200, camera_window=0.3, scan_repeats=20, camera_frames=2,
                standard_batch=3, standard_rounds=1, standard_step_rounds=2, standard_steps=200,
-               standard_step_robots=2, standard_calls=3)
+               standard_step_robots=2, standard_calls=3, web_rounds=1, web_window=0.3,
+               web_robots=2)
 
 
 SECTIONS = ('round_trips', 'spawn_growth', 'speed', 'startup', 'turning', 'core', 'spawn_cost',
-            'camera', 'sensors', 'answers', 'standard')
+            'camera', 'sensors', 'answers', 'standard', 'web')
 
 
 def run(config, *, sections=SECTIONS, report=print):
@@ -123,6 +130,7 @@ def run(config, *, sections=SECTIONS, report=print):
         'sensors': lambda: [sensor_table(observer, config)],
         'answers': lambda: [answers_table(observer, config)],
         'standard': lambda: [standard_table(observer, config)],
+        'web': lambda: [web_table(observer, config)],
     }
     try:
         for section, measure in measurements.items():

@@ -95,6 +95,16 @@ def generate_launch_description():
             'gui', default_value='false',
             description="Show MuJoCo's viewer (needs a display)"),
         DeclareLaunchArgument(
+            'web', default_value='false',
+            description="Serve a web page with the world in 3D, live, and the lesson's buttons"),
+        DeclareLaunchArgument(
+            'web_port', default_value='8080',
+            description='Port of the web page (the next free one if taken)'),
+        DeclareLaunchArgument(
+            'web_host', default_value='127.0.0.1',
+            description="Address of the web page: '127.0.0.1' for this machine only, "
+                        "'0.0.0.0' for every network it is on"),
+        DeclareLaunchArgument(
             'real_time_factor', default_value='1.0',
             description='Simulated seconds per wall second; 0 runs as fast as it can'),
         DeclareLaunchArgument(
@@ -114,6 +124,9 @@ def generate_launch_description():
                 'gui': ParameterValue(LaunchConfiguration('gui'), value_type=bool),
                 'real_time_factor': ParameterValue(
                     LaunchConfiguration('real_time_factor'), value_type=float),
+                'web': ParameterValue(LaunchConfiguration('web'), value_type=bool),
+                'web_port': ParameterValue(LaunchConfiguration('web_port'), value_type=int),
+                'web_host': ParameterValue(LaunchConfiguration('web_host'), value_type=str),
             }],
         ),
         Node(

@@ -6,7 +6,9 @@ simulation time) as child processes, then walks through the lesson's services on
 time, printing what each did: spawn R2-D2, turn tinybot through /control_robot_angle and
 measure how far it really turned, turn it again through the turn_robot action and cancel a
 second action turn half way, delete R2-D2, reset the simulation. The children are stopped at
-the end whatever happened; the exit status is 0 only if every step succeeded.
+the end whatever happened; the exit status is 0 only if every step succeeded. With --web the
+world serves its web page instead: the demo prints the page's address and keeps the world and
+the turning servers running until Ctrl-C, for the lesson's steps to be clicked on the page.
 """
 
 import argparse
@@ -63,6 +65,8 @@ RECORD_CAMERA_ARGS = ['-p', 'camera_enabled:=true', '-p', 'camera_rate:=10.0',
 HEADING_SAMPLE_PERIOD = 0.1
 # Below this turning rate, in rad/s, tinybot counts as stopped.
 AT_REST = 1e-3
+# What the world logs before its web page's address.
+WEB_PAGE_LOG = 'web page: '
 # Seconds a child gets to stop after SIGINT before it is killed.
 STOP_TIMEOUT = 5.0
 # The action steps: a quarter turn left, and a half turn canceled half way, in rad and rad/s.
@@ -317,10 +321,10 @@ def reset(node):
                f'tinybot heading {yaw_of(state.pose.orientation):.3f} rad'))
 
 
-def lesson_steps(options):
+def lesson_steps(options, node):
     """Return the demo's steps in order, as (title, function taking the demo's node)."""
     duration, velocity = options.duration, options.velocity
-    return [
+    steps = [
         ("spawn R2-D2 the lesson's way: /mujoco/spawn_urdf_model", spawn_r2d2),
         (f'turn tinybot: /control_robot_angle, {duration} s at {velocity} rad/s',
          lambda node: turn_robot(node, duration, velocity)),
@@ -331,6 +335,14 @@ def lesson_steps(options):
         ('delete R2-D2: /mujoco/delete_model', delete_r2d2),
         ('reset the simulation: /mujoco/reset_simulation', reset),
     ]
+    if options.record:
+        # Film from before R2-D2 appears until tinybot has turned, then save.
+        recorder = TurnRecorder(node)
+        if not recorder.wait_for_frame(options.startup_timeout):
+            raise DemoError('--record: no image from /mujoco/camera/image_raw')
+        steps.insert(2, (f'save the recording into {options.record}',
+                         lambda node: save_recording(recorder, options.record)))
+    return steps
 
 
 def run_lesson(node, steps, children):
@@ -349,6 +361,35 @@ def save_recording(recorder, directory):
         raise DemoError('nothing was recorded: no camera image and no odometry arrived')
     for path in paths:
         say(indent(f'wrote {os.path.abspath(path)}'))
+
+
+def serve_page(world, timeout):
+    """
+    Print the address of the world's web page and keep everything running until Ctrl-C.
+
+    The world logs the address once its page is up (viser takes the next port if the one asked
+    for is taken), so it is read from the world's log.
+    """
+    deadline = time.monotonic() + timeout
+    address = None
+    while address is None:
+        world.check_running()
+        with open(world.log_path) as log_file:
+            address = next((line.split(WEB_PAGE_LOG, 1)[1].split()[0] for line in log_file
+                            if WEB_PAGE_LOG in line), None)
+        if address is None:
+            if time.monotonic() > deadline:
+                raise DemoError(f'the world named no web page within {timeout} s')
+            time.sleep(0.1)
+    say(f"the world's web page: {address}")
+    say(indent('open it in a browser on this machine: spawn R2-D2, turn and drive tinybot '
+               'from its panel\nCtrl-C stops the world and the turning servers'))
+    try:
+        while True:
+            world.check_running()
+            time.sleep(0.5)
+    except KeyboardInterrupt:
+        say('turning_demo: stopping')
 
 
 def indent(text):
@@ -373,6 +414,12 @@ def parse_arguments(argv):
     parser.add_argument('--record', metavar='DIR',
                         help="film R2-D2 falling and tinybot turning with the world's camera; "
                              'write DIR/turning.gif and DIR/trajectory.svg')
+    parser.add_argument('--web', action='store_true',
+                        help="start the world with its web page, print the page's address and "
+                             'keep running until Ctrl-C instead of walking the lesson')
+    parser.add_argument('--web-port', type=int, default=8080,
+                        help='port of the web page (default: %(default)s; the next free one if '
+                             'taken)')
     options = parser.parse_args(argv)
     if options.duration < 0:
         parser.error(f'--duration must be 0 or more, got {options.duration}')
@@ -393,6 +440,8 @@ def main(args=None):
         for executable, ros_args in CHILDREN:
             if options.record and executable == 'mujoco_world':
                 ros_args = ros_args + RECORD_CAMERA_ARGS
+            if options.web and executable == 'mujoco_world':
+                ros_args = ros_args + ['-p', 'web:=true', '-p', f'web_port:={options.web_port}']
             children.append(Child(executable, ros_args, log_dir))
         say(f'started {", ".join(f"{c.name} (pid {c.process.pid})" for c in children)}; '
             f'their logs are in {log_dir}')
@@ -405,15 +454,10 @@ def main(args=None):
         started = time.monotonic()
         wait_for_services(node, children, options.startup_timeout)
         say(f'services up after {time.monotonic() - started:.1f} s')
-        steps = lesson_steps(options)
-        if options.record:
-            # Film from before R2-D2 appears until tinybot has turned, then save.
-            recorder = TurnRecorder(node)
-            if not recorder.wait_for_frame(options.startup_timeout):
-                raise DemoError('--record: no image from /mujoco/camera/image_raw')
-            steps.insert(2, (f'save the recording into {options.record}',
-                             lambda node: save_recording(recorder, options.record)))
-        run_lesson(node, steps, children)
+        if options.web:
+            serve_page(children[0], options.startup_timeout)
+        else:
+            run_lesson(node, lesson_steps(options, node), children)
         status = 0
     except (DemoError, TimeoutError) as error:
         print(f'turning_demo: failed: {error}', file=sys.stderr, flush=True)

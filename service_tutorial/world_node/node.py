@@ -174,6 +174,12 @@ class MujocoWorld(Node):
             self.world.pause()
         if parameters['gui']:
             self._open_viewer()
+        self.web_page = None
+        if parameters['web']:
+            from service_tutorial.world_node.web.page import WebPage
+            self.web_page = WebPage(self, parameters['web_host'], parameters['web_port'],
+                                    resolve_model_path)
+            self.get_logger().info(f'web page: {self.web_page.address}')
 
         # Every parameter that is not read-only takes effect when it is set.
         parameters.on_change(self.pace_changed, ['real_time_factor', *RATE_PARAMETERS.values()])
@@ -246,6 +252,8 @@ class MujocoWorld(Node):
         self.publish_due()
         if self.viewer is not None:
             self._sync_viewer()
+        if self.web_page is not None:
+            self.web_page.tick()  # returns at once while no browser is connected
         pacer.end_tick()
 
     def publish_due(self):
@@ -403,6 +411,9 @@ class MujocoWorld(Node):
         if self.viewer is not None:
             self.viewer.close()
             self.viewer = None
+        if self.web_page is not None:
+            self.web_page.close()
+            self.web_page = None
         self.camera_stream.close()
         self.world.background_renders.close()
         self.forwarded_logs.stop()

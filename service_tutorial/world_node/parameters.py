@@ -216,6 +216,17 @@ WORLD_PARAMETERS = (
     ParameterSpec(
         'gui', False, "MuJoCo's interactive viewer (needs a display)", read_only=True),
     ParameterSpec(
+        'web', False,
+        "Serve a web page with the world in 3D and the lesson's buttons (web_host:web_port)",
+        read_only=True),
+    ParameterSpec(
+        'web_port', 8080, 'Port of the web page (the next free one if taken)',
+        minimum=1, maximum=65535, read_only=True),
+    ParameterSpec(
+        'web_host', '127.0.0.1',
+        "Address the web page is served on: '127.0.0.1' for this machine only, '0.0.0.0' "
+        'for every network it is on', read_only=True),
+    ParameterSpec(
         'camera_enabled', False,
         'Publish ~/camera/image_raw and ~/camera/camera_info, rendered offscreen'),
     ParameterSpec(

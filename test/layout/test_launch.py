@@ -31,11 +31,15 @@ ARGUMENTS = {
     'namespace': "''",
     'use_sim_time': "'true'",
     'gui': "'false'",
+    'web': "'false'",
+    'web_port': "'8080'",
+    'web_host': "'127.0.0.1'",
     'real_time_factor': "'1.0'",
     'turning_server': "'false'",
     'rviz': "'false'",
 }
-TYPED = {'use_sim_time': 'bool', 'gui': 'bool', 'real_time_factor': 'float'}
+TYPED = {'use_sim_time': 'bool', 'gui': 'bool', 'real_time_factor': 'float', 'web': 'bool',
+         'web_port': 'int', 'web_host': 'str'}
 DISPLAYS = {  # class: the topic it shows
     'rviz_default_plugins/RobotModel': '/robot_description',
     'rviz_default_plugins/TF': None,
@@ -95,7 +99,7 @@ def test_the_world_gets_the_params_file_first_and_the_arguments_after_it(launch_
     parameters = keyword(worlds[0], 'parameters')
     assert [ast.unparse(element) for element in parameters.elts][0] == 'params_file'
     overrides = {ast.literal_eval(key) for key in parameters.elts[1].keys}
-    assert overrides == {'use_sim_time', 'gui', 'real_time_factor'}
+    assert overrides == {'use_sim_time', 'gui', 'real_time_factor', 'web', 'web_port', 'web_host'}
     for node in calls_to(launch_tree, 'Node'):
         assert ast.unparse(keyword(node, 'namespace')) == 'namespace'
 

@@ -4,7 +4,9 @@ import math
 import os
 import re
 import signal
+import socket
 import subprocess
+import urllib.request
 
 from programs import program_path, run_program
 import pytest
@@ -83,4 +85,29 @@ def test_ctrl_c_mid_demo_stops_the_children(tmp_path, start_program):
     assert 'interrupted' in rest
     assert 'mujoco_world stopped' in rest and 'robot_turning_server stopped' in rest
     assert 'robot_turning_action_server stopped' in rest
+    assert_gone(child_pids(''.join(seen)))
+
+
+def test_web_prints_the_page_address_serves_it_and_ctrl_c_ends_it_cleanly(tmp_path,
+                                                                          start_program):
+    with socket.socket() as probe:
+        probe.bind(('127.0.0.1', 0))
+        port = probe.getsockname()[1]
+    demo = start_program([program_path('turning_demo'), '--web', '--web-port', str(port),
+                          '--log-dir', str(tmp_path)], stderr=subprocess.STDOUT)
+    seen = []
+    for line in demo.stdout:
+        seen.append(line)
+        if "the world's web page: " in line:
+            break
+    address = seen[-1].split("the world's web page: ")[1].strip()
+    with urllib.request.urlopen(address, timeout=10) as page:
+        html = page.read().decode()
+    demo.send_signal(signal.SIGINT)
+    rest = demo.stdout.read()
+
+    assert demo.wait(timeout=30) == 0, ''.join(seen) + rest
+    assert address == f'http://127.0.0.1:{port}'
+    assert '<html' in html
+    assert 'mujoco_world stopped' in rest and rest.rstrip().endswith('done')
     assert_gone(child_pids(''.join(seen)))

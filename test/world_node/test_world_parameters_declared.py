@@ -46,6 +46,9 @@ INTENDED = {
     'model_poses': (T.PARAMETER_DOUBLE_ARRAY, None, True),
     'scenery': (T.PARAMETER_STRING, None, True),
     'gui': (T.PARAMETER_BOOL, None, True),
+    'web': (T.PARAMETER_BOOL, None, True),
+    'web_port': (T.PARAMETER_INTEGER, (1, 65535), True),
+    'web_host': (T.PARAMETER_STRING, None, True),
     'camera_enabled': (T.PARAMETER_BOOL, None, False),
     'camera_rate': (T.PARAMETER_DOUBLE, (0.0, INF), False),
     'camera_width': (T.PARAMETER_INTEGER, (1, 4096), False),
@@ -66,6 +69,7 @@ WRONG_TYPE = {
     'camera_rate': '[10]', 'camera_width': '480.0', 'camera_height': 'tall',
     'camera_position': '1.0', 'camera_look_at': '[a, b, c]', 'camera_fovy': 'wide',
     'snapshot_directory': '42', 'scenery': '[yard.urdf]',
+    'web': 'maybe', 'web_port': 'http', 'web_host': '127',
 }
 
 # A value out of range, and how the message writes it back; booleans and the directory have none.
@@ -78,6 +82,7 @@ OUT_OF_RANGE = {
     'camera_rate': ('0.0', '0.0'), 'camera_width': ('0', '0'), 'camera_height': ('5000', '5000'),
     'camera_position': ('[1.0, 2.0]', '[1.0, 2.0]'),
     'camera_look_at': ('[.nan, 0.0, 0.0]', 'nan'), 'camera_fovy': ('180.0', '180.0'),
+    'web_port': ('70000', '70000'),
 }
 
 _names = (f'world_parameters_{index}' for index in itertools.count())

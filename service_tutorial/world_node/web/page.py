@@ -1,0 +1,91 @@
+"""
+The world node's web page: a viser server with the world in 3D and the lesson's panel.
+
+viser serves its browser client from inside its Python package (no internet, no build, no GPU
+on the server). WebPage.tick() is the node's hook, called on every tick of the step timer: it
+returns at once while no browser is connected, so a page nobody opens costs one comparison a
+tick; while someone watches it sends the poses and the status UPDATE_RATE times a second of
+wall time. The panel's buttons never touch the world: they go through PageClient, a ROS client
+like any other.
+"""
+
+import collections
+import time
+
+from service_tutorial.world_node.web.page_client import PageClient
+from service_tutorial.world_node.web.panel import Panel
+from service_tutorial.world_node.web.scene_view import SceneView
+
+UPDATE_RATE = 30.0  # Hz of wall time, while a browser is connected
+STATUS_PERIOD = 0.25  # s of wall time between two updates of the status line
+# The real-time factor shown is measured over about this much wall time.
+FACTOR_WINDOW = 1.0  # s
+
+
+class WebPage:
+    """The page of one world node: its server, its 3D view, its panel and its ROS client."""
+
+    def __init__(self, node, host, port, resolve_model_path):
+        """Serve the page of node's world on host:port (viser takes the next port if taken)."""
+        import viser  # only with web:=true: it takes a while to import
+        self.node = node
+        self.world = node.world
+        self.server = viser.ViserServer(host=host, port=port, label='service_tutorial',
+                                        verbose=False)
+        self.watchers = 0
+        self.server.on_client_connect(self._client_connected)
+        self.server.on_client_disconnect(self._client_disconnected)
+        # A new page looks where the world's camera looks: tinybot and the lesson's R2-D2.
+        parameters = node.parameters
+        self.scene = SceneView(self.server, self.world, parameters['camera_position'],
+                               parameters['camera_look_at'], parameters['camera_fovy'])
+        self.client = PageClient(node)
+        with open(resolve_model_path('r2d2.urdf')) as urdf_file:
+            r2d2_urdf = urdf_file.read()
+        self.panel = Panel(self.server.gui, self.client, r2d2_urdf)
+        shown_host = '127.0.0.1' if host in ('', '0.0.0.0') else host
+        self.address = f'http://{shown_host}:{self.server.get_port()}'
+        self._next_update = 0.0
+        self._next_status = 0.0
+        self._samples = collections.deque()  # (wall time, simulation time)
+        self.updates = 0  # how many times the view was brought up to date
+
+    def _client_connected(self, _client):
+        self.watchers += 1
+
+    def _client_disconnected(self, _client):
+        self.watchers -= 1
+
+    def tick(self):
+        """Bring the page up to date if someone watches and its time has come; else nothing."""
+        if not self.watchers:
+            return
+        now = time.monotonic()
+        if now < self._next_update:
+            return
+        self._next_update = now + 1.0 / UPDATE_RATE
+        self.scene.update()
+        self.updates += 1
+        if now >= self._next_status:
+            self._next_status = now + STATUS_PERIOD
+            world = self.world
+            self.panel.show_status(world.time, self._real_time_factor(now, world.time),
+                                   world.model_names(), world.paused)
+
+    def _real_time_factor(self, wall, sim_time):
+        """Return simulated over wall seconds in the last FACTOR_WINDOW, or None so far."""
+        samples = self._samples
+        if samples and sim_time < samples[-1][1]:
+            samples.clear()  # a reset put time back
+        samples.append((wall, sim_time))
+        while len(samples) > 2 and wall - samples[1][0] >= FACTOR_WINDOW:
+            samples.popleft()
+        first_wall, first_sim = samples[0]
+        if wall - first_wall < 0.5 * FACTOR_WINDOW:
+            return None
+        return (sim_time - first_sim) / (wall - first_wall)
+
+    def close(self):
+        """Stop the page's client and its server."""
+        self.client.close()
+        self.server.stop()
