@@ -120,7 +120,8 @@ class Sensor(Plugin):
         if active == self.active:
             return
         self.active = active
-        self._next_reading = self.world.time if active else math.inf
+        # The first reading comes with the next step; later ones a whole period after it.
+        self._next_reading = self._next_step() if active else math.inf
         self.world.schedule_event(self._next_reading)
 
     def next_event(self):
@@ -149,4 +150,7 @@ class Sensor(Plugin):
     def reset(self):
         """After a reset, an active sensor measures again from the next step on."""
         if self.active:
-            self._next_reading = self.world.time
+            self._next_reading = self._next_step()
+
+    def _next_step(self):
+        return self.world.time + self.world.timestep
