@@ -13,11 +13,58 @@ come from the node <world node's name>_sensors (mujoco_sensors with the default 
 world node's namespace. The world node resolves the topic names, so its namespace and
 remappings apply as to its other topics. The node is made with the first sensor topic and never
 spun: it only publishes, and the faces count its topics' subscribers.
+
+The sensors' context lives as long as the world node's context: one per world context, made
+with the first sensor topic, kept (with a hidden node of its own that holds its participant)
+while world nodes come and go, and ended when the world's context shuts down. Fast DDS 2.14
+can hang deleting a participant while another participant of the same process and domain
+delivers discovery data to it (seen once in the test suite: rmw's set_listener(nullptr) spun
+for good while a discovery callback waited for its mutex). Ended after the world's context,
+whose nodes (and so its participant) are gone by then, the sensors' participant has no such
+neighbour left.
 """
+
+import atexit
+import threading
 
 import rclpy
 from rclpy.context import Context
 from rclpy.event_handler import PublisherEventCallbacks
+
+_lock = threading.Lock()
+_contexts = {}  # id of a world's context -> (the sensors' Context, the node keeping it up)
+
+
+def _sensor_context(world_context):
+    """Return the sensors' context beside a world's context, made once."""
+    key = id(world_context)
+    with _lock:
+        if key not in _contexts:
+            context = Context()
+            # No command-line arguments: a node rename given to the world must not name these.
+            context.init(args=[], initialize_logging=False,
+                         domain_id=world_context.get_domain_id())
+            # Hidden (a leading underscore): `ros2 node list --all` shows it.
+            keeper = rclpy.create_node(
+                '_sensors_participant', context=context, use_global_arguments=False,
+                start_parameter_services=False, enable_rosout=False)
+            _contexts[key] = (context, keeper)
+            world_context.on_shutdown(lambda: _end_sensor_context(key))
+        return _contexts[key][0]
+
+
+def _end_sensor_context(key):
+    with _lock:
+        context, keeper = _contexts.pop(key, (None, None))
+    if context is not None:
+        keeper.destroy_node()
+        context.try_shutdown()
+
+
+@atexit.register
+def _end_sensor_contexts():
+    for key in list(_contexts):
+        _end_sensor_context(key)
 
 
 class SensorNode:
@@ -26,7 +73,6 @@ class SensorNode:
     def __init__(self, world_node):
         """Make nothing yet: the context and node come with the first publisher."""
         self._world_node = world_node
-        self._context = None
         self._node = None
 
     @property
@@ -54,20 +100,13 @@ class SensorNode:
             self._node.destroy_publisher(publisher)
 
     def _start(self):
-        context = Context()
-        # No command-line arguments: a node rename given to the world must not name this one.
-        context.init(args=[], initialize_logging=False,
-                     domain_id=self._world_node.context.get_domain_id())
-        self._context = context
+        context = _sensor_context(self._world_node.context)
         self._node = rclpy.create_node(
             self.name, namespace=self._world_node.get_namespace(), context=context,
             use_global_arguments=False, start_parameter_services=False, enable_rosout=False)
 
     def destroy(self):
-        """Destroy the node and end its context."""
+        """Destroy the node (its context stays for the process's other worlds)."""
         if self._node is not None:
             self._node.destroy_node()
             self._node = None
-        if self._context is not None:
-            self._context.try_shutdown()
-            self._context = None
