@@ -77,6 +77,34 @@ class Browser:
         """Click a button of the page as a person would."""
         self.button(label).click()
 
+    def tick(self, label):
+        """Tick or untick the checkbox with this label, as a click on its label does."""
+        label_element = self._wait(lambda: self.driver.find_elements(
+            'xpath', f"//label[normalize-space()='{label}']"), 10.0, f'checkbox {label!r}')[0]
+        label_element.click()
+
+    def choose(self, label, option, *, timeout=10.0):
+        """Open the dropdown with this label and click one of its options."""
+        label_element = self._wait(lambda: self.driver.find_elements(
+            'xpath', f"//label[normalize-space()='{label}']"), timeout, f'dropdown {label!r}')[0]
+        self.driver.find_element('id', label_element.get_attribute('for')).click()
+        self._wait(lambda: self.driver.find_elements(
+            'xpath', f"//*[@role='option' and normalize-space()='{option}']"), timeout,
+            f'option {option!r} of {label!r}')[0].click()
+
+    def panel_image(self, *, timeout=10.0):
+        """Return the picture the panel shows (a robot camera's), as an RGB array."""
+        image = self._wait(lambda: [element for element in self.driver.find_elements(
+            'xpath', "//img[starts-with(@src, 'blob:')]") if element.size['height'] > 10],
+            timeout, 'an image in the panel')[0]
+        self.driver.execute_script('arguments[0].scrollIntoView(true);', image)
+        return np.asarray(Image.open(io.BytesIO(image.screenshot_as_png)).convert('RGB'))
+
+    def panel_images(self):
+        """Return how many pictures the panel shows."""
+        return len([element for element in self.driver.find_elements(
+            'xpath', "//img[starts-with(@src, 'blob:')]") if element.size['height'] > 10])
+
     def type_into(self, label, text):
         """Replace what the text field with this label holds, as typing would."""
         from selenium.webdriver.common.keys import Keys
@@ -136,6 +164,12 @@ def blue_pixels(view):
     """Count the pixels of a view as blue as tinybot's body."""
     red, green, blue = view[..., 0], view[..., 1], view[..., 2]
     return int(np.count_nonzero((blue - red > BLUE_OVER_RED) & (blue - green > BLUE_OVER_GREEN)))
+
+
+def red_pixels(view):
+    """Count the pixels of a view as red as the page's laser points (nothing else is)."""
+    red, green, blue = view[..., 0], view[..., 1], view[..., 2]
+    return int(np.count_nonzero((red > 180) & (green < 80) & (blue < 80)))
 
 
 def changed_pixels(before, after, *, threshold=40):

@@ -13,7 +13,9 @@ ROSDEP_KEYS = {
     'PIL': 'python3-pil', 'hypothesis': 'python3-hypothesis', 'lxml': 'python3-lxml',
     'numpy': 'python3-numpy', 'pytest': 'python3-pytest', 'yaml': 'python3-yaml',
 }
-WITHOUT_KEY = ('mujoco', 'yourdfpy', 'trimesh', 'viser', 'selenium')  # pip; package.xml says so
+# pip-installed, as package.xml says; websockets and msgspec come with viser (the tests open the
+# page's websocket as viser's browser client does).
+WITHOUT_KEY = ('mujoco', 'yourdfpy', 'trimesh', 'viser', 'selenium', 'websockets', 'msgspec')
 # This package, and the modules the tests import from the repository's folders.
 OWN_MODULES = {'service_tutorial'} | {
     os.path.splitext(os.path.basename(path))[0]

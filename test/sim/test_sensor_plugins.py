@@ -83,6 +83,27 @@ def test_laser_reads_the_distance_to_a_wall_and_inf_beyond_its_range():
     assert np.isposinf(laser.ranges).all(), 'a wall beyond range_max must read +inf'
 
 
+def test_laser_hit_points_lie_on_the_wall_where_the_laser_stood_when_it_scanned():
+    world, laser = laser_world(1.0)
+    listen(laser)
+    world.step(1)
+    points = laser.hit_points()
+    # Every beam that reads a range ends on the wall's face, 1 m ahead, across its 2 m.
+    assert len(points) == np.isfinite(laser.ranges).sum() > 80
+    assert points[:, 0] == pytest.approx(LASER_ORIGIN[0] + 1.0, abs=0.005)
+    assert points[:, 2] == pytest.approx(LASER_ORIGIN[2], abs=1e-6)
+    assert points[:, 1].min() == pytest.approx(-1.0, abs=0.02)
+    assert points[:, 1].max() == pytest.approx(1.0, abs=0.02)
+    # Moved half a metre to the side, the laser's next scan shows the wall's nearer end.
+    world.set_model_state('laser', position=(0.0, 0.5, 0.0), orientation=(1.0, 0.0, 0.0, 0.0))
+    world.step(round(laser.period / world.timestep))
+    moved = laser.hit_points()
+    assert moved[:, 0] == pytest.approx(LASER_ORIGIN[0] + 1.0, abs=0.005)
+    assert moved[:, 1].min() == pytest.approx(-1.0, abs=0.02)
+    assert moved[:, 1].max() == pytest.approx(1.0, abs=0.02)
+    assert len(moved) != len(points)
+
+
 def test_laser_reads_minus_inf_closer_than_its_minimum_range():
     world, laser = laser_world(0.3, **{'<min>0.05</min>': '<min>0.5</min>'})
     listen(laser)

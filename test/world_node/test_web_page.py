@@ -13,17 +13,20 @@ import os
 import time
 
 import numpy as np
+from PIL import Image
 import pytest
 from rclpy.parameter import Parameter
 from running_world import lesson_pose
 from service_tutorial.conversions import make_pose, yaw_of
 from service_tutorial.lesson.robot_turning_server import RobotTurningServer
+from service_tutorial.sim.plugins.camera_sensor import CameraSensor
+from service_tutorial.sim.plugins.ray_sensor import RaySensor
 from service_tutorial.turning_input import NOT_A_NUMBER, VELOCITY_TOO_HIGH
 from service_tutorial.world_node.pacing import MAX_TICK_SIMULATED
 from service_tutorial.world_node.web.page import UPDATE_RATE
 from srv_interfaces.srv import GetModelList
 from std_srvs.srv import Empty
-from web_browser import blue_pixels, browser_or_skip, changed_pixels, free_port
+from web_browser import blue_pixels, browser_or_skip, changed_pixels, free_port, red_pixels
 
 pytestmark = pytest.mark.ros
 
@@ -72,6 +75,9 @@ class WebWorld:
         assert self.ros.wait_for(lambda: abs(self.tinybot().twist.angular.z) < 1e-3,
                                  timeout=10.0)
         return yaw_of(self.tinybot().pose.orientation)
+
+    def sensor(self, kind):
+        return self.world.node.world.models['tinybot'].plugin(kind)
 
     def view(self):
         """Wait until the page has surely shown the world as it is now; return its 3D view."""
@@ -206,6 +212,37 @@ class TestWebPage:
         position = web_world.tinybot().pose.position
         assert math.hypot(position.x, position.y) < 1e-3
 
+    def test_lasers_show_as_red_points_while_ticked_and_are_listened_to_only_then(
+            self, web_world):
+        laser = web_world.sensor(RaySensor)
+        assert not laser.active, 'nobody listens to /scan yet'
+        assert red_pixels(web_world.view()) < 20
+        web_world.browser.tick('Show lasers')
+        assert web_world.ros.wait_for(lambda: laser.active, timeout=5.0)
+        # tinybot's scan: its hits on the yard's walls, a few hundred red pixels.
+        web_world.view_until(lambda view: red_pixels(view) > 300, 'laser points on the walls')
+        web_world.browser.tick('Show lasers')
+        assert web_world.ros.wait_for(lambda: not laser.active, timeout=5.0)
+        web_world.view_until(lambda view: red_pixels(view) < 20, 'the laser points gone')
+
+    def test_a_chosen_camera_shows_its_image_in_the_panel_and_is_listened_to_only_then(
+            self, web_world):
+        camera = web_world.sensor(CameraSensor)
+        assert not camera.active, 'nobody listens to /camera/image_raw yet'
+        web_world.browser.choose('Camera', '/camera/image_raw')
+        assert web_world.ros.wait_for(lambda: camera.active, timeout=5.0)
+        shown = web_world.browser.panel_image()
+        frame = camera.image  # tinybot stands still: every frame is the same
+        height, width, _ = frame.shape
+        assert shown.shape[1] / shown.shape[0] == pytest.approx(width / height, rel=0.05)
+        seen = np.asarray(Image.fromarray(shown).resize((width, height))).astype(int)
+        assert frame.std() > 10.0, 'the yard should not look like one flat colour'
+        assert np.abs(seen - frame).mean() < 12.0, 'the panel should show what the camera sees'
+        web_world.browser.choose('Camera', 'none')
+        assert web_world.ros.wait_for(lambda: not camera.active, timeout=5.0)
+        assert web_world.ros.wait_for(lambda: web_world.browser.panel_images() == 0,
+                                      timeout=5.0)
+
     def test_a_thousand_clicks_a_second_are_answered_or_dropped_and_the_world_keeps_pace(
             self, web_world):
         client, panel = web_world.page.client, web_world.page.panel
@@ -231,10 +268,17 @@ class TestWebPage:
               f'real-time factor {factor:.2f}')
         assert web_world.world.delete('r2d2').success
 
-    def test_a_closed_tab_costs_nothing_afterwards(self, web_world):
+    def test_a_tab_closed_mid_stream_costs_nothing_afterwards(self, web_world):
+        laser, camera = web_world.sensor(RaySensor), web_world.sensor(CameraSensor)
+        web_world.browser.tick('Show lasers')
+        web_world.browser.choose('Camera', '/camera/image_raw')
+        assert web_world.ros.wait_for(lambda: laser.active and camera.active, timeout=5.0)
         assert web_world.page.watchers == 1
         web_world.browser.close()
         assert web_world.ros.wait_for(lambda: web_world.page.watchers == 0, timeout=10.0)
-        updates = web_world.page.updates
-        time.sleep(5.0 / UPDATE_RATE)
+        # Nobody watches: the page stops listening, and sends nothing while the world runs on.
+        assert web_world.ros.wait_for(lambda: not (laser.active or camera.active), timeout=5.0)
+        updates, now = web_world.page.updates, web_world.world.now()
+        assert web_world.ros.wait_for(lambda: web_world.world.now() > now + 10.0 / UPDATE_RATE,
+                                      timeout=10.0)
         assert web_world.page.updates == updates

@@ -128,6 +128,7 @@ class RaySensor(Sensor):
         self._distances = np.zeros(config.samples)
         self._noise = np.zeros(config.samples)
         self.ranges = np.full(config.samples, np.inf, dtype=np.float32)
+        self._origin = np.zeros(3)  # where the last scan was cast from, in the world
         self._own_geoms = np.zeros(0, dtype=int)
         self._own_groups = np.zeros(0, dtype=int)
 
@@ -156,11 +157,12 @@ class RaySensor(Sensor):
         mj_model, data, config = self.world.model, self.world.data, self.config
         np.matmul(self._directions, data.site_xmat[self.site_id].reshape(3, 3).T,
                   out=self._world_directions)
+        self._origin[:] = data.site_xpos[self.site_id]
         groups = mj_model.geom_group
         groups[self._own_geoms] = HIDDEN_GROUP
         try:
             # flg_static 1: the floor and the scenery are fixed to the world, and seen.
-            mujoco.mj_multiRay(mj_model, data, data.site_xpos[self.site_id],
+            mujoco.mj_multiRay(mj_model, data, self._origin,
                                self._world_directions.reshape(-1), RAY_GEOM_GROUPS, 1, -1,
                                self._geom_ids, self._distances, None, config.samples,
                                config.range_max)
@@ -168,6 +170,11 @@ class RaySensor(Sensor):
             groups[self._own_geoms] = self._own_groups
         scan_ranges(self._distances, self._geom_ids, config, self.random, self._noise)
         self.ranges[:] = self._distances
+
+    def hit_points(self):
+        """Return where the last scan's readings in range lie in the world, (n, 3) in m."""
+        hits = np.isfinite(self.ranges)
+        return self._origin + self.ranges[hits, None] * self._world_directions[hits]
 
 
 def scan_ranges(distances, geom_ids, config, random, noise):

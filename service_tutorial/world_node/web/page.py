@@ -15,6 +15,7 @@ import time
 from service_tutorial.world_node.web.page_client import PageClient
 from service_tutorial.world_node.web.panel import Panel
 from service_tutorial.world_node.web.scene_view import SceneView
+from service_tutorial.world_node.web.sensor_view import SensorView
 
 UPDATE_RATE = 30.0  # Hz of wall time, while a browser is connected
 STATUS_PERIOD = 0.25  # s of wall time between two updates of the status line
@@ -43,6 +44,7 @@ class WebPage:
         with open(resolve_model_path('r2d2.urdf')) as urdf_file:
             r2d2_urdf = urdf_file.read()
         self.panel = Panel(self.server.gui, self.client, r2d2_urdf)
+        self.sensors = SensorView(self.server, self.panel, self.client, node)
         shown_host = '127.0.0.1' if host in ('', '0.0.0.0') else host
         self.address = f'http://{shown_host}:{self.server.get_port()}'
         self._next_update = 0.0
@@ -59,12 +61,15 @@ class WebPage:
     def tick(self):
         """Bring the page up to date if someone watches and its time has come; else nothing."""
         if not self.watchers:
+            if self.client.subscriptions:  # the last browser just left
+                self.sensors.stop()
             return
         now = time.monotonic()
         if now < self._next_update:
             return
         self._next_update = now + 1.0 / UPDATE_RATE
         self.scene.update()
+        self.sensors.update(now)
         self.updates += 1
         if now >= self._next_status:
             self._next_status = now + STATUS_PERIOD

@@ -5,7 +5,9 @@ viser runs the page's callbacks on its own threads, which must never touch the w
 call PageClient instead, which sends the very requests a ROS client would (the world's
 services, /control_robot_angle, a Twist on cmd_vel) and hands each answer to a callback on the
 client's executor thread. One call of each kind at a time: a click that comes while the last
-one of its kind is still unanswered is dropped, and the caller is told so.
+one of its kind is still unanswered is dropped, and the caller is told so. It also subscribes
+to the sensor topics the page shows (listen()), as raw bytes it never reads: the page draws
+the sensors' readings from the world, and only needs them to measure.
 """
 
 import threading
@@ -26,6 +28,7 @@ R2D2_QUATERNION = (0.0, 0.0, -0.707, 0.707)  # x, y, z, w
 DRIVE_HOLD = 1.0  # s
 DRIVE_PERIOD = 0.1  # s
 CMD_VEL_DEPTH = 10
+SENSOR_DEPTH = 1
 
 
 class PageClient:
@@ -53,6 +56,7 @@ class PageClient:
         self.drive_timer = node.create_timer(DRIVE_PERIOD, self.drive_timer_callback)
         self.drive_timer.cancel()
         self._in_flight = set()
+        self.subscriptions = {}  # topic -> raw subscription, for the sensors shown
         self._lock = threading.Lock()
         self.sent_calls = 0  # requests sent for the page
         self.dropped_calls = 0  # clicks dropped while a call of their kind was unanswered
@@ -139,8 +143,21 @@ class PageClient:
             return
         self.cmd_vel_pub.publish(twist)
 
+    def listen(self, wanted):
+        """Subscribe to exactly the topics of wanted, {topic: message type}."""
+        for topic in [topic for topic in self.subscriptions if topic not in wanted]:
+            self.node.destroy_subscription(self.subscriptions.pop(topic))
+        for topic, msg_type in wanted.items():
+            if topic not in self.subscriptions:
+                self.subscriptions[topic] = self.node.create_subscription(
+                    msg_type, topic, _ignore, SENSOR_DEPTH, raw=True)
+
     def close(self):
         """Stop spinning and destroy the page's node."""
         self.executor.shutdown()
         self._thread.join(timeout=2.0)
         self.node.destroy_node()
+
+
+def _ignore(_serialized):
+    """Take a sensor message and drop it: the page shows the reading from the world."""

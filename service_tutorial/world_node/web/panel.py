@@ -1,15 +1,17 @@
 """
-The page's panel: the lesson's buttons, the turn's two fields, the drive buttons, the status.
+The page's panel: the lesson's buttons, the turn's fields, the drive buttons, the sensors, status.
 
 Every button goes through PageClient, so the page asks the world exactly what a ROS client
 would and gets the same answers, shown under "Answer". The turn's fields are read as the
 lesson's robot_turning_client reads what is typed, with its limits and its refusals
 (service_tutorial.turning_input), before anything is sent. The status (simulation time,
 real-time factor, models) is set by the world's thread, a few times a second while someone
-watches.
+watches; so are the sensors' choices offered and their pictures (sensor_view.py).
 """
 
 import threading
+
+import numpy as np
 
 from service_tutorial.turning_input import parse_turning_request, TurningInputError
 from std_srvs.srv import Empty
@@ -20,6 +22,7 @@ DRIVE_BUTTONS = (('Forward', 0.2, 0.0), ('Left', 0.0, 0.5), ('Stop', 0.0, 0.0),
 DROPPED = 'still waiting for the last answer: click dropped'
 NO_SERVICE = '{service} is not there'
 NO_TURNING_SERVER = ' (start it: robot_turning_server --ros-args -p use_sim_time:=true)'
+NO_CAMERA = 'none'
 
 
 class Panel:
@@ -47,6 +50,11 @@ class Panel:
             for label, linear, angular in DRIVE_BUTTONS:
                 self._button(gui, label, lambda linear=linear, angular=angular:
                              client.drive(linear, angular))
+        with gui.add_folder('Sensors'):
+            self.show_lasers = gui.add_checkbox('Show lasers', False)
+            self.camera_choice = gui.add_dropdown('Camera', (NO_CAMERA,))
+            self.camera_image = gui.add_image(np.zeros((2, 2, 3), dtype=np.uint8),
+                                              format='jpeg', visible=False)
         self.answer = gui.add_markdown('**Answer** -')
 
     @staticmethod
@@ -109,6 +117,13 @@ class Panel:
                 self.say(f'{self.client.service_name("turn")}: success {response.success} '
                          f'({duration} s at {velocity} rad/s)')
         self._sent_or_dropped(self.client.turn(duration, velocity, answered))
+
+    def offer_cameras(self, image_topics):
+        """Offer the robots' cameras by image topic; a choice that went falls back to none."""
+        chosen = self.camera_choice.value
+        self.camera_choice.options = (NO_CAMERA, *image_topics)
+        if chosen not in image_topics:
+            self.camera_choice.value = NO_CAMERA
 
     def show_status(self, sim_time, real_time_factor, model_names, paused):
         """Show simulation time, real-time factor and the models (from the world's thread)."""
