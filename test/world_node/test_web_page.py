@@ -218,10 +218,13 @@ class TestWebPage:
         assert not laser.active, 'nobody listens to /scan yet'
         assert red_pixels(web_world.view()) < 20
         web_world.browser.tick('Show lasers')
-        assert web_world.ros.wait_for(lambda: laser.active, timeout=5.0)
-        # tinybot's scan: its hits on the yard's walls, a few hundred red pixels.
-        web_world.view_until(lambda view: red_pixels(view) > 300, 'laser points on the walls')
-        web_world.browser.tick('Show lasers')
+        try:
+            assert web_world.ros.wait_for(lambda: laser.active, timeout=5.0)
+            # tinybot's scan: its hits on the yard's walls, a few hundred red pixels.
+            web_world.view_until(lambda view: red_pixels(view) > 300,
+                                 'laser points on the walls')
+        finally:
+            web_world.browser.tick('Show lasers')
         assert web_world.ros.wait_for(lambda: not laser.active, timeout=5.0)
         web_world.view_until(lambda view: red_pixels(view) < 20, 'the laser points gone')
 
@@ -230,15 +233,20 @@ class TestWebPage:
         camera = web_world.sensor(CameraSensor)
         assert not camera.active, 'nobody listens to /camera/image_raw yet'
         web_world.browser.choose('Camera', '/camera/image_raw')
-        assert web_world.ros.wait_for(lambda: camera.active, timeout=5.0)
-        shown = web_world.browser.panel_image()
-        frame = camera.image  # tinybot stands still: every frame is the same
+        try:
+            assert web_world.ros.wait_for(lambda: camera.active, timeout=5.0)
+            # The first frame comes once the camera's renderer is made (software GL: seconds).
+            assert web_world.ros.wait_for(lambda: web_world.page.sensors.images_sent > 0,
+                                          timeout=30.0)
+            shown = web_world.browser.panel_image(timeout=30.0)
+            frame = camera.image  # tinybot stands still: every frame is the same
+        finally:
+            web_world.browser.choose('Camera', 'none')
         height, width, _ = frame.shape
         assert shown.shape[1] / shown.shape[0] == pytest.approx(width / height, rel=0.05)
         seen = np.asarray(Image.fromarray(shown).resize((width, height))).astype(int)
         assert frame.std() > 10.0, 'the yard should not look like one flat colour'
         assert np.abs(seen - frame).mean() < 12.0, 'the panel should show what the camera sees'
-        web_world.browser.choose('Camera', 'none')
         assert web_world.ros.wait_for(lambda: not camera.active, timeout=5.0)
         assert web_world.ros.wait_for(lambda: web_world.browser.panel_images() == 0,
                                       timeout=5.0)

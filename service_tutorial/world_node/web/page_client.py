@@ -29,6 +29,7 @@ DRIVE_HOLD = 1.0  # s
 DRIVE_PERIOD = 0.1  # s
 CMD_VEL_DEPTH = 10
 SENSOR_DEPTH = 1
+SPIN_PERIOD = 0.1  # s: how soon the client's thread sees close()
 
 
 class PageClient:
@@ -60,14 +61,18 @@ class PageClient:
         self._lock = threading.Lock()
         self.sent_calls = 0  # requests sent for the page
         self.dropped_calls = 0  # clicks dropped while a call of their kind was unanswered
+        self._stopping = threading.Event()
         self.executor = SingleThreadedExecutor(context=world_node.context)
         self.executor.add_node(node)
         self._thread = threading.Thread(target=self._spin, name='web page client', daemon=True)
         self._thread.start()
 
     def _spin(self):
+        # Until close() says stop; the executor is shut down only once this thread has ended
+        # (shut down from another thread while it waits, rclpy's executor can trip over it).
         try:
-            self.executor.spin()
+            while not self._stopping.is_set():
+                self.executor.spin_once(timeout_sec=SPIN_PERIOD)
         except ExternalShutdownException:
             pass
 
@@ -154,8 +159,9 @@ class PageClient:
 
     def close(self):
         """Stop spinning and destroy the page's node."""
-        self.executor.shutdown()
+        self._stopping.set()
         self._thread.join(timeout=2.0)
+        self.executor.shutdown()
         self.node.destroy_node()
 
 
