@@ -59,12 +59,17 @@ def prepared_model(order, *, taken, batch, frame_state, descriptions):
     return Model(order.name, description, world_position, world_orientation)
 
 
-def log_spawned(logger, model):
-    """Log where a model was spawned and each note on how it was built."""
-    logger.info("spawned model '%s' at %s", model.name,
-                np.round(model.spawn_position, 4).tolist())
-    for note in model.description.notes:
-        logger.warning("model '%s': %s", model.name, note)
+def log_spawned(logger, models):
+    """Log where models were spawned (one line for a batch) and each note on their building."""
+    places = [f"'{model.name}' at {np.round(model.spawn_position, 4).tolist()}"
+              for model in models]
+    if len(places) == 1:
+        logger.info('spawned model %s', places[0])
+    elif places:  # a line each would cost a /rosout message each
+        logger.info('spawned %d models: %s', len(places), ', '.join(places))
+    for model in models:
+        for note in model.description.notes:
+            logger.warning("model '%s': %s", model.name, note)
 
 
 def read_urdf_file(path):

@@ -172,9 +172,10 @@ class World:
                 refusal = self._attach({name: model})
                 if refusal is not None:
                     outcomes[outcomes.index(model)] = refusal
-        for model in (model for model in outcomes if isinstance(model, Model)):
+        spawned = [model for model in outcomes if isinstance(model, Model)]
+        for model in spawned:
             model.reset_plugins()
-            spawning.log_spawned(_logger, model)
+        spawning.log_spawned(_logger, spawned)
         self.schedule_events()
         return outcomes
 

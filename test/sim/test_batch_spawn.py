@@ -41,6 +41,16 @@ def test_a_batch_spawns_every_robot_with_one_recompile(monkeypatch):
     assert abs(world.get_model_state('tiny4').position[0]) < 0.01
 
 
+def test_a_batch_is_logged_in_one_line_naming_each_robot_and_where(caplog):
+    world = World()
+    caplog.set_level('INFO', logger='service_tutorial.world')
+    world.spawn_urdf_batch(tinybot_orders(3))
+    spawned = [record.getMessage() for record in caplog.records
+               if record.getMessage().startswith('spawned')]
+    assert spawned == ["spawned 3 models: 'tiny0' at [0.0, 0.0, 0.0], "
+                       "'tiny1' at [0.0, 0.5, 0.0], 'tiny2' at [0.0, 1.0, 0.0]"]
+
+
 def test_a_bad_order_in_the_middle_is_refused_and_the_others_spawn():
     world = World()
     orders = tinybot_orders(3)
