@@ -5,7 +5,8 @@ Building a robot (parsing, checks, yourdfpy, the spec builder) took most of a sp
 spawns one description many times. A description is kept under a digest of its text and the
 folder its meshes resolve from, and used again only while its mesh files are unchanged. A
 description with missing meshes is not kept: the files may turn up. Spawning never changes a
-description: the world's spec attaches a copy of it.
+description: the world's spec attaches a copy of it. Within one batch, a fleet's orders share
+one text: it is digested and its meshes checked once (for_batch()).
 """
 
 import collections
@@ -58,3 +59,23 @@ class DescriptionCache:
             while len(self._kept) > self._size:
                 self._kept.popitem(last=False)
         return description
+
+    def for_batch(self):
+        """Return a loader for one batch: the same text object loads once, however often."""
+        return _BatchLoader(self)
+
+
+class _BatchLoader:
+    """The cache's load, done once per text object and folder of one batch."""
+
+    def __init__(self, cache):
+        self._cache = cache
+        self._loaded = {}  # (id of the text, base_dir) -> (text, description)
+
+    def load(self, urdf_xml, base_dir=None):
+        """Return the RobotDescription of URDF text, as the cache's own load does."""
+        key = (id(urdf_xml), base_dir)
+        loaded = self._loaded.get(key)
+        if loaded is None or loaded[0] is not urdf_xml:
+            loaded = self._loaded[key] = (urdf_xml, self._cache.load(urdf_xml, base_dir))
+        return loaded[1]

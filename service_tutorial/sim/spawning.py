@@ -31,13 +31,32 @@ class SpawnOrder:
     base_dir: str = None  # where mesh paths relative to the URDF resolve
 
 
+def prepared_batch(orders, *, taken, frame_state, descriptions):
+    """
+    Check orders and build their Models with prepared_model(); nothing is attached yet.
+
+    Return, for each order, its Model or the WorldError that refused it; and the Models by
+    name. descriptions: the world's DescriptionCache, which loads a text once for the batch.
+    """
+    outcomes, batch = [], {}
+    loader = descriptions.for_batch()
+    for order in orders:
+        try:
+            batch[order.name] = prepared_model(order, taken=taken, batch=batch,
+                                               frame_state=frame_state, descriptions=loader)
+            outcomes.append(batch[order.name])
+        except WorldError as error:
+            outcomes.append(error)
+    return outcomes, batch
+
+
 def prepared_model(order, *, taken, batch, frame_state, descriptions):
     """
     Check an order and build its Model, or raise WorldError; nothing is attached yet.
 
     taken: the names in the world; batch: the models of the same batch prepared so far, by
     name (an order may stand relative to one of them); frame_state: the world's ModelState of
-    a reference frame; descriptions: the world's DescriptionCache.
+    a reference frame; descriptions: what loads the URDF's description (a DescriptionCache).
     """
     validation.check_model_name(order.name)
     if order.name in taken or order.name in batch:

@@ -158,15 +158,9 @@ class World:
         order changes nothing and leaves the others to spawn. Should the batch not compile or
         not simulate as a whole, its models are attached one at a time to tell which fail.
         """
-        outcomes, batch = [], {}
-        for order in orders:
-            try:
-                batch[order.name] = spawning.prepared_model(
-                    order, taken=self._models, batch=batch, frame_state=self._frame_state,
-                    descriptions=self._descriptions)
-                outcomes.append(batch[order.name])
-            except WorldError as error:
-                outcomes.append(error)
+        outcomes, batch = spawning.prepared_batch(
+            orders, taken=self._models, frame_state=self._frame_state,
+            descriptions=self._descriptions)
         if batch and self._attach(batch) is not None:
             for name, model in batch.items():
                 refusal = self._attach({name: model})

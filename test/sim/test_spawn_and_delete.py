@@ -108,3 +108,23 @@ def test_the_cache_keeps_a_bounded_number_of_descriptions():
     with pytest.raises(UrdfError):
         cache.load('<robot/>')
     assert isinstance(first[0].spec, mujoco.MjSpec)
+
+
+def test_a_batch_of_one_text_digests_it_and_checks_its_meshes_once(monkeypatch):
+    cache = DescriptionCache(None, 0.002)
+    urdf = read_file(MESHBOT)
+    folder = os.path.dirname(MESHBOT)
+    cache.load(urdf, folder)
+    stats = []
+    stat = os.stat
+    monkeypatch.setattr(os, 'stat', lambda path, *args, **kwargs: (
+        stats.append(path), stat(path, *args, **kwargs))[1])
+    batch = cache.for_batch()
+    loaded = [batch.load(urdf, folder) for _ in range(5)]
+    assert all(description is loaded[0] for description in loaded)
+    assert len(stats) == len(set(stats)) == 4, stats  # meshbot's four mesh files, once each
+    # A batch's missing meshes are looked for once too, yet every batch looks again.
+    missing = cache.for_batch()
+    missing_urdf = read_file(MISSINGBOT)
+    assert missing.load(missing_urdf, folder) is missing.load(missing_urdf, folder)
+    assert cache.for_batch().load(missing_urdf, folder) is not missing.load(missing_urdf, folder)
