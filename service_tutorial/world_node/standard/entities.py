@@ -223,7 +223,7 @@ class EntityServices:
         """Return the names of the entities that pass every filter, in spawn order."""
         entity_filter = EntityFilter(filters, self.world)
         return [name for name, model in self.world.models.items()
-                if entity_filter.matches(model, entity_info(model))]
+                if entity_filter.matches(model)]
 
 
 def _spawned(outcome):
