@@ -47,6 +47,8 @@ class Table:
 
 
 def _format(value, fmt):
+    if value is None:  # no limit: the row only informs
+        return '-'
     if isinstance(value, bool):
         return 'yes' if value else 'NO'
     if fmt and isinstance(value, (int, float)):
@@ -127,7 +129,8 @@ def targets(tables):
                      worst < TURNING_TARGET_PERCENT])
     if 'standard_interfaces' in by_key:
         for row in by_key['standard_interfaces'].rows:
-            rows.append([f'{row[0]} (ms)', row[2], row[5], row[6]])
+            if row[5] is not None:
+                rows.append([f'{row[0]} (ms)', row[2], row[5], row[6]])
     if 'web' in by_key:
         for row in by_key['web'].rows:
             rows.append([f'{row[0]} ratio, {row[1]} robot(s)', row[4], row[5], row[6]])

@@ -9,12 +9,14 @@ best of each, as the core's stepping row does: on this shared machine the same 1
 steps took from 0.8 to 1.4 s from one round to the next.
 """
 
+import ctypes
 import time
 
 from fleet import core_fleet, DRIVE_ANGULAR_Z, Fleet, fleet_names, fleet_parameters
 from fleet import fleet_position, RawFleet, read_model
 from harness import BenchmarkError, ExecutorThread, quiet_console, wait_until
 import mujoco
+from rcl_client import RclClient, Sequence, String
 from report import median_ms, Table
 from round_trips import TrivialService
 from spawn_cost import BareWorld
@@ -34,6 +36,25 @@ TINYBOT_URI = 'package://service_tutorial/models/tinybot.urdf'
 TOPICS_PER_TINYBOT = 8
 # Steps the driving fleet takes before the stepping rounds, and to check it drives.
 STEP_WARM_UP = 500
+RESULT_OK = 1  # simulation_interfaces/msg/Result
+
+
+class CResult(ctypes.Structure):
+    """simulation_interfaces/msg/Result as a C struct."""
+
+    _fields_ = [('result', ctypes.c_uint8), ('error_message', String)]
+
+
+class CStatesResponse(ctypes.Structure):
+    """GetEntitiesStates.Response as a C struct: the result, the names and their states."""
+
+    _fields_ = [('result', CResult), ('entities', Sequence), ('states', Sequence)]
+
+
+class CTriggerResponse(ctypes.Structure):
+    """std_srvs/Trigger.Response as a C struct."""
+
+    _fields_ = [('success', ctypes.c_bool), ('message', String)]
 
 
 class StandardWorld:
@@ -80,6 +101,16 @@ class StandardWorld:
         start = time.perf_counter()
         self._observer.call(Trigger, '/benchmark_trivial/trigger', Trigger.Request())
         return time.perf_counter() - start
+
+    def rcl_client(self, srv_type, name):
+        """Return a client in C of a service (rcl_client.py) once the service is there."""
+        client = RclClient(self._observer.node, srv_type, name)
+        try:
+            client.wait_for_service()
+        except BaseException:
+            client.destroy()
+            raise
+        return client
 
     def remove_spawned(self):
         """Remove every entity spawned since start-up (ResetSimulation, scope SPAWNED)."""
@@ -190,9 +221,26 @@ def core_states(world, names):
             for name, acceleration in zip(names, accelerations)]
 
 
+def timed_in_c(client, layout, answered):
+    """Return the wall time of one call from a C client; fail unless answered(its answer)."""
+    start = time.perf_counter()
+    client.call()
+    seconds = time.perf_counter() - start
+    if not answered(client.response(layout)):
+        raise BenchmarkError(f'{client.name} answered the C client wrongly')
+    return seconds
+
+
 def states_rounds(world, config):
-    """Time GetEntitiesStates of a spawned fleet, the same states on a World, and Trigger."""
+    """
+    Time GetEntitiesStates of a spawned fleet, the same states on a World, and Trigger.
+
+    The service and Trigger are called from a client in C (rcl_client.py), as a C or C++
+    program calls them, and from rclpy's client, whose turning the answer into Python messages
+    is a cost of its own.
+    """
     from simulation_interfaces.srv import GetEntitiesStates, SpawnEntities
+    from std_srvs.srv import Trigger
     count = config.standard_batch
     world.call(SpawnEntities, '/spawn_entities', batch_spawn(count, tinybot_resource()))
     core, names = core_fleet(count, driving=False), fleet_names(count)
@@ -200,17 +248,38 @@ def states_rounds(world, config):
     if list(response.entities) != names:
         raise BenchmarkError(f'get_entities_states listed {list(response.entities)}, not the '
                              f'{count} tinybots spawned')
-    samples = {'states': [], 'core states': [], 'trigger': []}
-    for index in range(config.standard_calls + 3):  # the first three warm up
-        start = time.perf_counter()
-        core_states(core, names)
-        round_samples = {'core states': time.perf_counter() - start,
-                         'states': world.timed(GetEntitiesStates, '/get_entities_states',
-                                               GetEntitiesStates.Request()),
-                         'trigger': world.trigger()}
-        if index >= 3:
-            for key, value in round_samples.items():
-                samples[key].append(value)
+
+    def all_states(answer):
+        return (answer.result.result == RESULT_OK and answer.entities.size == count
+                and answer.states.size == count)
+
+    states_client = world.rcl_client(GetEntitiesStates, '/get_entities_states')
+    try:
+        trigger_client = world.rcl_client(Trigger, '/benchmark_trivial/trigger')
+    except BaseException:
+        states_client.destroy()
+        raise
+    samples = {'states': [], 'core states': [], 'trigger': [], 'rclpy states': [],
+               'rclpy trigger': []}
+    try:
+        for index in range(config.standard_calls + 3):  # the first three warm up
+            start = time.perf_counter()
+            core_states(core, names)
+            round_samples = {'core states': time.perf_counter() - start,
+                             'states': timed_in_c(states_client, CStatesResponse,
+                                                  all_states),
+                             'trigger': timed_in_c(trigger_client, CTriggerResponse,
+                                                   lambda answer: answer.success),
+                             'rclpy states': world.timed(GetEntitiesStates,
+                                                         '/get_entities_states',
+                                                         GetEntitiesStates.Request()),
+                             'rclpy trigger': world.trigger()}
+            if index >= 3:
+                for key, value in round_samples.items():
+                    samples[key].append(value)
+    finally:
+        states_client.destroy()
+        trigger_client.destroy()
     return samples
 
 
@@ -276,7 +345,9 @@ def step_rounds(observer, config):
 
 
 def _row(figure, rounds, measured, reference, trigger, limit):
-    return [figure, rounds, measured, reference, trigger, limit, measured <= limit]
+    """Return a row of the table; a row without a limit (None) only informs."""
+    within = None if limit is None else measured <= limit
+    return [figure, rounds, measured, reference, trigger, limit, within]
 
 
 def standard_table(observer, config):
@@ -321,6 +392,11 @@ def standard_table(observer, config):
                            f'{TRIGGERS_ALLOWED:g} x Trigger', len(states['states']),
                            median_ms(states['states']), core, trigger,
                            core + TRIGGERS_ALLOWED * trigger))
+    rclpy_extra = median_ms(states['rclpy states']) - median_ms(states['states'])
+    table.rows.append(_row(f"GetEntitiesStates of {count} entities from rclpy's client, "
+                           'Trigger too (no limit)', len(states['rclpy states']),
+                           median_ms(states['rclpy states']), core,
+                           median_ms(states['rclpy trigger']), None))
     table.note = (
         'reference: what the service is compared with, taken in turns with it, round by round. '
         f'SpawnEntities: from request to answer, each tinybot by its uri ({TINYBOT_URI}; '
@@ -345,5 +421,10 @@ def standard_table(observer, config):
         f'{TRIGGERS_ALLOWED:g} x Trigger. GetEntitiesStates: every entity, no filter; '
         "reference: the core's cost, the same accelerations, poses and twists read from a "
         f'ROS-free World holding the same fleet; limit reference + {TRIGGERS_ALLOWED:g} x '
-        "Trigger. Trigger: the trivial service on the world's executor.")
+        'Trigger, the call and the Trigger both from a client in C (rcl_client.py: librcl '
+        'through ctypes, the answer taken into C structs as a C or C++ client takes it), so '
+        "that the limit holds the world to its own cost; rclpy's client, in the row without a "
+        f'limit, spends {rclpy_extra:.1f} ms more on the same call, turning the answer into '
+        f'{count} nested Python messages. '
+        "Trigger: the trivial service on the world's executor.")
     return table

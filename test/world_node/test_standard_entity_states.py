@@ -2,6 +2,9 @@
 
 from geometry_msgs.msg import Twist, Vector3
 import pytest
+from service_tutorial.conversions import seconds_of
+from service_tutorial.sim.world import World
+from service_tutorial.world_node.standard.entity_messages import EntityStates
 from simulation_interfaces.msg import EntityState, Result
 from simulation_interfaces.srv import SetEntityState
 from standard_entities import close, CRATE, entity_state, red_box, snapshot, spawn_or_fail
@@ -100,3 +103,37 @@ def test_refusals_of_setting_a_state(world):
         == Result.RESULT_OK
     assert close(vector(entity_state(world, 'red_box').state.pose.position), (0.0, -5.0, 0.0))
     assert entity_state(world, 'ghost').result.result == Result.RESULT_NOT_FOUND
+
+
+def numbers(state):
+    """Return the stamp, frame, position, orientation (w, x, y, z), twist and acceleration."""
+    orientation = state.pose.orientation
+    return (seconds_of(state.header.stamp), state.header.frame_id, vector(state.pose.position),
+            (orientation.w, orientation.x, orientation.y, orientation.z),
+            vector(state.twist.linear), vector(state.twist.angular),
+            vector(state.acceleration.linear), vector(state.acceleration.angular))
+
+
+def test_kept_state_messages_are_refilled_with_each_call():
+    world = World()
+    for name, x in (('near', 0.0), ('far', 3.0)):
+        world.spawn_urdf(name, CRATE.replace('crate', name), position=(x, 0.0, 0.2))
+    states = EntityStates(world)
+
+    def in_world(name):
+        state = world.get_model_state(name)
+        return (world.time, 'world', tuple(state.position), tuple(state.orientation),
+                tuple(state.linear_velocity), tuple(state.angular_velocity))
+
+    first = [numbers(state)[:6] for state in states(['near', 'far'])]
+    assert first == [in_world('near'), in_world('far')]
+    world.set_model_state('near', position=(1.0, 2.0, 0.5), orientation=(0.0, 0.0, 0.0, 1.0),
+                          linear_velocity=(0.5, 0.0, 0.0), angular_velocity=(0.0, 0.0, 0.3))
+    world.step(5, even_if_paused=True)
+    near, far = states(['near', 'far'])
+    assert [numbers(near)[:6], numbers(far)[:6]] == [in_world('near'), in_world('far')]
+    assert numbers(near)[2] != first[0][2] and world.time > 0.0
+    # The first message kept now carries whichever entity is listed first.
+    only, = states(['far'])
+    assert only is near
+    assert numbers(only)[:6] == in_world('far')

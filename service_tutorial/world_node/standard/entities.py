@@ -15,7 +15,7 @@ from service_tutorial.sim import validation
 from service_tutorial.sim.validation import DescriptionError, quoted, WorldError
 from service_tutorial.world_node.standard.entity_filters import EntityFilter
 from service_tutorial.world_node.standard.entity_messages import CATEGORIES, entity_info
-from service_tutorial.world_node.standard.entity_messages import entity_states
+from service_tutorial.world_node.standard.entity_messages import EntityStates
 from service_tutorial.world_node.standard.entity_messages import fill_entity_bounds
 from service_tutorial.world_node.standard.results import answer, Refusal
 from service_tutorial.world_node.standard.spawn_requests import SpawnPlanner
@@ -52,6 +52,9 @@ class EntityServices:
         self.node = node
         self.world = node.world
         self.package_share = package_share
+        # Each answer's messages are kept for its next call.
+        self.states = EntityStates(self.world)
+        self.state = EntityStates(self.world)
         self.spawn_entity_srv = node.create_service(
             SpawnEntity, 'spawn_entity', self.spawn_entity_callback)
         self.spawn_entities_srv = node.create_service(
@@ -144,7 +147,7 @@ class EntityServices:
         """List the entities that pass every filter with their states in the world frame."""
         def listed():
             names = self._filtered(request.filters)
-            response.states = entity_states(self.world, names)
+            response.states = self.states(names)
             response.entities = names
         answer(self.node, 'GetEntitiesStates', response.result, listed)
         return response
@@ -153,7 +156,7 @@ class EntityServices:
         """Report an entity's pose, twist and acceleration in the world frame."""
         def read():
             self._model(request.entity)
-            response.state, = entity_states(self.world, [request.entity])
+            response.state, = self.state([request.entity])
         answer(self.node, 'GetEntityState', response.result, read)
         return response
 
@@ -223,7 +226,7 @@ class EntityServices:
         """Return the names of the entities that pass every filter, in spawn order."""
         entity_filter = EntityFilter(filters, self.world)
         return [name for name, model in self.world.models.items()
-                if entity_filter.matches(model, entity_info(model))]
+                if entity_filter.matches(model)]
 
 
 def _spawned(outcome):

@@ -12,6 +12,7 @@ import math
 import numpy as np
 from service_tutorial.sim import bounds
 from service_tutorial.sim.validation import quoted
+from service_tutorial.world_node.standard.entity_messages import entity_info
 from service_tutorial.world_node.standard.name_patterns import NamePattern, PatternError
 from service_tutorial.world_node.standard.results import Refusal
 from simulation_interfaces.msg import Bounds, Result, TagsFilter
@@ -22,7 +23,7 @@ MAX_FILTER_TAGS = 1000
 
 
 class EntityFilter:
-    """One request's filters, checked; matches(name, model, info) applies them all."""
+    """One request's filters, checked; matches(model) applies them all."""
 
     def __init__(self, filters, world):
         """Check filters (an EntityFilters message), or raise a Refusal naming the value."""
@@ -32,14 +33,17 @@ class EntityFilter:
         self._tags = _tags(filters.tags)
         self._overlaps = _bounds_test(filters.bounds)
 
-    def matches(self, model, info):
-        """Return True if a model (with its EntityInfo) passes every filter."""
+    def matches(self, model):
+        """Return True if a model passes every filter."""
         if self._pattern is not None and not self._pattern.search(model.name):
             return False
-        if self._categories and info.category.category not in self._categories:
-            return False
-        if self._tags is not None and not self._tags(set(info.tags)):
-            return False
+        if self._categories or self._tags is not None:
+            # Only these two read the EntityInfo, which a model without one builds anew.
+            info = entity_info(model)
+            if self._categories and info.category.category not in self._categories:
+                return False
+            if self._tags is not None and not self._tags(set(info.tags)):
+                return False
         return self._overlaps is None or self._overlaps(
             bounds.collision_boxes(self._world, model))
 

@@ -1,7 +1,7 @@
 """The world's entities as the standard's messages: EntityInfo, EntityState and Bounds."""
 
 from geometry_msgs.msg import Vector3
-from service_tutorial.conversions import fill_pose_msg, fill_time_msg, fill_twist_msg
+from service_tutorial.conversions import time_msg
 from service_tutorial.sim import bounds
 from simulation_interfaces.msg import Bounds, EntityCategory, EntityInfo, EntityState
 
@@ -30,19 +30,53 @@ def entity_info(model):
     return EntityInfo(category=EntityCategory(category=default_category(model)))
 
 
-def entity_states(world, names):
-    """Return the EntityState of each named model, in the world frame."""
-    states = []
-    for name, (linear, angular) in zip(names, world.get_model_accelerations(names)):
-        pose = world.get_model_state(name)
-        state = EntityState()
-        fill_time_msg(state.header.stamp, world.time)
-        state.header.frame_id = 'world'
-        fill_pose_msg(state.pose, pose.position, pose.orientation)
-        fill_twist_msg(state.twist, pose.linear_velocity, pose.angular_velocity)
-        fill_twist_msg(state.acceleration, linear, angular)
-        states.append(state)
-    return states
+class EntityStates:
+    """
+    The EntityState messages of a world's models, kept from call to call and refilled.
+
+    Building the nested messages anew (a state holds ten message objects) costs more than
+    reading the states from MuJoCo; writing the numbers into messages kept costs a fraction.
+    The n-th message listed is reused for the n-th model listed the next time, so a message
+    returned holds its state until the next call only: the executor sends a response before
+    it serves another call.
+    """
+
+    def __init__(self, world):
+        """Read the states of world's models."""
+        self._world = world
+        self._messages = []  # (EntityState, its leaf messages), the first ones reused
+
+    def __call__(self, names):
+        """Return the EntityState of each named model, in the world frame."""
+        world = self._world
+        accelerations = world.get_model_accelerations(names)
+        while len(self._messages) < len(names):
+            self._messages.append(_state_message())
+        stamp = time_msg(world.time)  # one for every state
+        states = []
+        for name, (linear, angular), (state, leaves) in zip(names, accelerations,
+                                                            self._messages):
+            pose = world.get_model_state(name)
+            state.header.stamp = stamp
+            position, orientation, velocity, turning, acceleration, angular_acceleration = leaves
+            position.x, position.y, position.z = pose.position.tolist()
+            orientation.w, orientation.x, orientation.y, orientation.z = \
+                pose.orientation.tolist()
+            velocity.x, velocity.y, velocity.z = pose.linear_velocity.tolist()
+            turning.x, turning.y, turning.z = pose.angular_velocity.tolist()
+            acceleration.x, acceleration.y, acceleration.z = linear.tolist()
+            angular_acceleration.x, angular_acceleration.y, angular_acceleration.z = \
+                angular.tolist()
+            states.append(state)
+        return states
+
+
+def _state_message():
+    """Return a new EntityState in the world frame and its messages that take numbers."""
+    state = EntityState()
+    state.header.frame_id = 'world'
+    return state, (state.pose.position, state.pose.orientation, state.twist.linear,
+                   state.twist.angular, state.acceleration.linear, state.acceleration.angular)
 
 
 def fill_entity_bounds(message, world, model):
