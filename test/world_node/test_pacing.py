@@ -323,8 +323,8 @@ def test_steps_on_request_go_free_running_and_stop_at_the_count(real_time_factor
     assert pacer.free_running is (real_time_factor == 0.0)
 
 
-def test_a_tick_past_its_budget_is_followed_by_as_long_a_rest_for_the_calls_waiting():
-    # 120 ms a step: a tick takes one step, far past its budget.
+def test_a_tick_far_past_its_budget_is_followed_by_as_long_a_rest_for_the_calls_waiting():
+    # 120 ms a step: a tick takes one step, far past its 50 ms budget.
     pacer, world, wall, _ = make(0.0, step_cost=0.12)
     pacer.start_tick()
     world.tick()
@@ -332,6 +332,15 @@ def test_a_tick_past_its_budget_is_followed_by_as_long_a_rest_for_the_calls_wait
     assert world.steps == 1
     assert pacer.resting()
     wall.now += 0.119
+    assert pacer.resting()
+    wall.now += 0.002
+    assert not pacer.resting()
+    # 70 ms a step: a little past its budget, the tick rests only as long as it ran over.
+    world.step_cost = 0.07
+    pacer.start_tick()
+    world.tick()
+    pacer.end_tick()
+    wall.now += 0.019
     assert pacer.resting()
     wall.now += 0.002
     assert not pacer.resting()
