@@ -101,8 +101,10 @@ class SimulatedWorld:
             with localhost_discovery():
                 rclpy.init(context=self.context, domain_id=self._claim.domain_id,
                            signal_handler_options=SignalHandlerOptions.NO)
+            # One participant on the world's own domain: Fast DDS 2.14 can hang deleting a
+            # participant while another of the same process and domain sends it discovery data.
             self.world_node = self._spin(MujocoWorld(
-                context=self.context, namespace=self.namespace,
+                sensor_participant=False, context=self.context, namespace=self.namespace,
                 parameter_overrides=[Parameter(name, value=value) for name, value in
                                      {'paused': True, **parameters}.items()]))
             self.timestep = self.world_node.get_parameter('timestep').value

@@ -103,12 +103,13 @@ def left_out_of(description):
 class MujocoWorld(Node):
     """Serves a MuJoCo world the way gazebo_ros serves Gazebo's."""
 
-    def __init__(self, **kwargs):
+    def __init__(self, *, sensor_participant=True, **kwargs):
+        """Start the world; sensor_participant: sensor topics in a participant of their own."""
         super().__init__('mujoco', **kwargs)
         self.parameters = parameters = declare_world_parameters(self)  # ParameterError if bad
         self.forwarded_logs = forward_core_logs(self)
         try:
-            self._start(parameters)
+            self._start(parameters, sensor_participant)
         except BaseException:
             self.forwarded_logs.stop()
             raise
@@ -117,7 +118,7 @@ class MujocoWorld(Node):
             f'timestep {self.world.timestep} s, real_time_factor '
             f'{parameters["real_time_factor"]}')
 
-    def _start(self, parameters):
+    def _start(self, parameters, sensor_participant):
         """Make the world, its services and topics, and the start-up models."""
         # Imported here, after the parameters passed their checks: a bad one ends the program
         # before the simulation's imports (yourdfpy and trimesh take over a second).
@@ -149,7 +150,8 @@ class MujocoWorld(Node):
             Clock, '/clock', CLOCK_QOS,
             event_callbacks=PublisherEventCallbacks(use_default_callbacks=False))
         self.tf_batch = TransformBatch(self)  # /tf, for every drive's OdomTfFace
-        self.sensor_node = SensorNode(self)  # publishes the sensors' topics (sensor_node.py)
+        # Publishes the sensors' topics (sensor_node.py).
+        self.sensor_node = SensorNode(self, own_participant=sensor_participant)
         # Each model the world removes by itself to save the others, with the reason.
         self.removed_models_pub = self.create_publisher(
             RemovedModel, '~/removed_models', REMOVED_MODELS_QOS)

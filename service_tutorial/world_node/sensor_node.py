@@ -70,20 +70,31 @@ def _end_sensor_contexts():
 class SensorNode:
     """Publishers of sensor topics, on a node of their own in a context of its own."""
 
-    def __init__(self, world_node):
-        """Make nothing yet: the context and node come with the first publisher."""
+    def __init__(self, world_node, *, own_participant=True):
+        """
+        Make nothing yet: the context and node come with the first publisher.
+
+        own_participant False: the world node publishes the sensors' topics itself (the
+        testing fixture's worlds, each alone on its domain, whose one participant then goes
+        with its context).
+        """
         self._world_node = world_node
+        self._own_participant = own_participant
         self._node = None
 
     @property
     def name(self):
         """Return the name the node has, or will have once a sensor topic makes it."""
+        if not self._own_participant:
+            return self._world_node.get_name()
         return f'{self._world_node.get_name()}_sensors'
 
     @property
     def publishers(self):
-        """Return the publishers the node has."""
-        return list(self._node.publishers) if self._node is not None else []
+        """Return the publishers the node has beside the world node's own."""
+        if self._node is None or not self._own_participant:
+            return []
+        return list(self._node.publishers)
 
     def create_publisher(self, msg_type, topic, depth):
         """Make a publisher of a topic, named as the world node would name it."""
@@ -100,6 +111,9 @@ class SensorNode:
             self._node.destroy_publisher(publisher)
 
     def _start(self):
+        if not self._own_participant:
+            self._node = self._world_node
+            return
         context = _sensor_context(self._world_node.context)
         self._node = rclpy.create_node(
             self.name, namespace=self._world_node.get_namespace(), context=context,
@@ -107,6 +121,6 @@ class SensorNode:
 
     def destroy(self):
         """Destroy the node (its context stays for the process's other worlds)."""
-        if self._node is not None:
+        if self._node is not None and self._own_participant:
             self._node.destroy_node()
-            self._node = None
+        self._node = None
