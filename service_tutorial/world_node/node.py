@@ -19,6 +19,7 @@ The parameters are declared in parameters.py, and every one that is not read-onl
 effect as soon as it is set. What the simulation logs reaches the node's logger (and /rosout).
 """
 
+import inspect
 import os
 import time
 
@@ -117,6 +118,28 @@ class MujocoWorld(Node):
             f'MuJoCo world ready: {", ".join(self.world.model_names()) or "no models"}, '
             f'timestep {self.world.timestep} s, real_time_factor '
             f'{parameters["real_time_factor"]}')
+
+    def create_service(self, srv_type, srv_name, callback, **kwargs):
+        """Create a service whose answers the pacer hears of (Pacer.answered)."""
+        def answered():
+            pacer = getattr(self, 'pacer', None)  # the parameter services come first
+            if pacer is not None:
+                pacer.answered()
+
+        def answer(request, response):
+            try:
+                return callback(request, response)
+            finally:
+                answered()
+
+        async def answer_when_done(request, response):  # a callback that waits (stepping)
+            try:
+                return await callback(request, response)
+            finally:
+                answered()
+        return super().create_service(
+            srv_type, srv_name,
+            answer_when_done if inspect.iscoroutinefunction(callback) else answer, **kwargs)
 
     def _start(self, parameters, sensor_participant):
         """Make the world, its services and topics, and the start-up models."""
@@ -256,7 +279,7 @@ class MujocoWorld(Node):
             self._sync_viewer()
         if self.web_page is not None:
             self.web_page.tick()  # returns at once while no browser is connected
-        pacer.end_tick()
+        pacer.end_tick(back_to_back=period_ns == 0)
 
     def publish_due(self):
         """Publish /clock, the models' streams and the camera where their time has come."""
@@ -359,6 +382,8 @@ class MujocoWorld(Node):
                 self.models.pop(name)
                 self.world.delete_model(name)
                 self._announce_removal(Removal(name, self.world.time, reason))
+        if waiting:  # part of answering the spawns: the callers' next calls come after
+            self.pacer.answered()
 
     def delete_model(self, name):
         """Remove a model from the world along with its ROS interface."""
@@ -438,6 +463,11 @@ def main(args=None):
         rclpy.spin_until_future_complete(world, world.quitting)
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
+    except Exception:
+        # Ctrl-C or SIGTERM shuts the context down under a running callback (the step
+        # publishing) or the executor's wait, which then fails: the world stopping, no error.
+        if rclpy.ok():
+            raise
     finally:
         if world is not None:
             world.destroy_node()

@@ -357,3 +357,18 @@ def test_a_tick_far_past_its_budget_is_followed_by_as_long_a_rest_for_the_calls_
     pacer.end_tick()
     wall.now += pacing.MAX_REST + 1e-6
     assert not pacer.resting()
+
+
+def test_after_a_tick_back_to_back_the_next_turn_goes_to_the_calls_waiting():
+    pacer, world, _, _ = make(0.0, step_cost=0.001)
+    pacer.start_tick()
+    world.tick()
+    pacer.end_tick(back_to_back=True)
+    # The executor's next turn answers the calls that came during the tick; the one after ticks.
+    assert pacer.resting()
+    assert not pacer.resting()
+    # A timer with a period gives the calls their turns itself.
+    pacer.start_tick()
+    world.tick()
+    pacer.end_tick()
+    assert not pacer.resting()

@@ -270,3 +270,26 @@ def test_the_log_handler_leaves_with_the_node(rclpy_session):
     finally:
         world.destroy_node()
     assert handlers() == [] and core.level == level
+
+
+@pytest.mark.parametrize('real_time_factor', [0.0, 1.0])
+def test_a_stop_signal_ends_the_world_quietly_whatever_it_was_doing(
+        ros, start_program, real_time_factor):
+    # SIGTERM (docker stop, launch after a SIGINT) shuts the context down under the step
+    # callback, mostly while it publishes; SIGINT too, in a program started where it is ignored.
+    clock = []
+    ros.client_node.create_subscription(Clock, '/clock', clock.append, TIME_SOURCE)
+    for _ in range(3):
+        world = start_program([sys.executable, '-m', 'service_tutorial.world_node.node',
+                               '--ros-args', '-p', f'real_time_factor:={real_time_factor}'],
+                              cwd=ROOT)
+        try:
+            response = ros.call(SpawnModel, '/mujoco/spawn_urdf_model', SpawnModel.Request(
+                model_name='r2d2', model_xml=read_model('r2d2')), timeout=60.0)
+            assert response.success, response.status_message
+            clock.clear()
+            assert ros.wait_for(lambda: len(clock) >= 20), 'the world does not step'
+        finally:
+            world.send_signal(signal.SIGTERM)
+            stderr = world.communicate(timeout=30.0)[1]
+        assert world.returncode == 0 and 'Traceback' not in stderr, stderr
