@@ -125,8 +125,12 @@ class Model:
         self.root_id = self.element_id(mj_model, mujoco.mjtObj.mjOBJ_BODY, description.root_link)
         self.free_qpos_adr = self.free_dof_adr = None
         qpos, dofs = [], []
-        # Found in C: a batch spawn binds every new model over a model of all their joints.
-        for joint_id in np.flatnonzero(np.isin(mj_model.jnt_bodyid, list(bodies))).tolist():
+        # Each body's joints are numbered one after the other (body_jntadr, body_jntnum), in
+        # body order: a batch spawn binds every new model over a model of all their joints.
+        for joint_id in [joint for body in sorted(bodies)
+                         for joint in range(mj_model.body_jntadr[body],
+                                            mj_model.body_jntadr[body]
+                                            + mj_model.body_jntnum[body])]:
             kind = int(mj_model.jnt_type[joint_id])
             qpos_adr = int(mj_model.jnt_qposadr[joint_id])
             dof_adr = int(mj_model.jnt_dofadr[joint_id])

@@ -1,10 +1,15 @@
 """ROS naming rules the world node applies to a spawn request; the simulation knows none."""
 
+import re
+
 from service_tutorial.sim.validation import quoted
 from service_tutorial.sim.validation import WorldError
 
 # Leaves room for the topic names under it within the DDS limit of about 250 characters.
 MAX_NAMESPACE_LENGTH = 200
+# A part of a ROS name between slashes: an ASCII letter or underscore, then letters, digits, _.
+_TOKEN = '[A-Za-z_][A-Za-z0-9_]*'
+_PATH = re.compile(f'{_TOKEN}(?:/{_TOKEN})*')
 
 
 def normalise_namespace(namespace):
@@ -12,9 +17,7 @@ def normalise_namespace(namespace):
     namespace = (namespace or '').strip()
     tokens = [token for token in namespace.split('/') if token]
     for token in tokens:
-        if not (token[0].isalpha() or token[0] == '_') or not all(
-                character.isalnum() or character == '_' for character in token) or (
-                not token.isascii()):
+        if not re.fullmatch(_TOKEN, token):
             raise WorldError(f'robot namespace {quoted(namespace)} is not a valid ROS '
                              f'namespace: its part {quoted(token)} must start with a letter '
                              'or underscore and hold only ASCII letters, digits and '
@@ -74,10 +77,7 @@ def _expand(name, namespace, node, block):
         expanded = name
     else:
         expanded = topic_prefix(namespace) + name
-    tokens = expanded.strip('/').split('/')
-    if not all(token and (token[0].isalpha() or token[0] == '_') and token.isascii() and all(
-            character.isalnum() or character == '_' for character in token)
-            for token in tokens):
+    if not _PATH.fullmatch(expanded.strip('/')):
         raise WorldError(f'plugin {quoted(block.name)} names topic {quoted(name)}, which is '
                          'not a valid ROS topic name')
     return expanded
