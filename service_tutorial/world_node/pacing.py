@@ -32,11 +32,11 @@ answers every call waiting, one after the other, before the next tick; otherwise
 call of each service between two ticks. Such a world gives its services about half of its
 thread's time. A tick a little past its budget (a chunk of steps that took longer than its
 estimate) rests only as long as it ran over: resting as long as the tick made StepSimulation's
-10,000 steps a quarter slower. Ticks back to back (free-running, or steps on request) leave the
-executor's turn after each tick to the calls that came during it: the executor would otherwise
-run the next tick first, and every call, get_model_list too, waited one and a half ticks (85 ms
-at the 50 ms budget). A call answered then puts the next tick off by FOLLOW_UP (answered), for
-the caller's next call.
+10,000 steps a quarter slower. Free-running ticks back to back leave the executor's turn after
+each tick to the calls that came during it: the executor would otherwise run the next tick
+first, and every call, get_model_list too, waited one and a half ticks (85 ms at the 50 ms
+budget). A call answered then puts the next tick off by FOLLOW_UP (answered), for the caller's
+next call. Steps on request keep every turn (the node says which ticks are back to back).
 
 While a spawn or a delete keeps the world busy, simulation time stands still (hold), as in
 Gazebo; the world does not run fast afterwards to make up for it.
