@@ -21,7 +21,9 @@ can hang deleting a participant while another participant of the same process an
 delivers discovery data to it (seen once in the test suite: rmw's set_listener(nullptr) spun
 for good while a discovery callback waited for its mutex). Ended after the world's context,
 whose nodes (and so its participant) are gone by then, the sensors' participant has no such
-neighbour left.
+neighbour left from the world; another context of the process on the same domain (a test's
+own) still is one, which is why the testing fixture's worlds, each alone on its domain,
+publish their sensors' topics from the world node (MujocoWorld(sensor_participant=False)).
 """
 
 import atexit
