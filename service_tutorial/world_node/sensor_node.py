@@ -15,15 +15,18 @@ remappings apply as to its other topics. The node is made with the first sensor 
 spun: it only publishes, and the faces count its topics' subscribers.
 
 The sensors' context lives as long as the world node's context: one per world context, made
-with the first sensor topic, kept (with a hidden node of its own that holds its participant)
-while world nodes come and go, and ended when the world's context shuts down. Fast DDS 2.14
-can hang deleting a participant while another participant of the same process and domain
-delivers discovery data to it (seen once in the test suite: rmw's set_listener(nullptr) spun
-for good while a discovery callback waited for its mutex). Ended after the world's context,
-whose nodes (and so its participant) are gone by then, the sensors' participant has no such
-neighbour left from the world; another context of the process on the same domain (a test's
-own) still is one, which is why the testing fixture's worlds, each alone on its domain,
-publish their sensors' topics from the world node (MujocoWorld(sensor_participant=False)).
+with the first sensor topic and ended when the world's context shuts down. Fast DDS 2.14 can
+hang deleting a participant while another participant of the same process and domain delivers
+discovery data to it (seen in the test suite: rmw's set_listener(nullptr) spun for good while a
+discovery callback waited for its mutex). rmw deletes a context's participant with the
+context's last node, so both participants are held by a hidden node each
+(_sensors_participant, _sensors_neighbour in the world's context) while world nodes and a
+test's nodes come and go; without the second, each test that ended with its world deleted the
+world context's participant beside the sensors'. At shutdown the sensors' participant goes
+first, then the world's hidden node: one deletion beside a neighbour per process, not one per
+test. A test's own context on the same domain is still a neighbour, which is why the testing
+fixture's worlds, each alone on its domain, publish their sensors' topics from the world node
+(MujocoWorld(sensor_participant=False)).
 """
 
 import atexit
@@ -47,20 +50,24 @@ def _sensor_context(world_context):
             context.init(args=[], initialize_logging=False,
                          domain_id=world_context.get_domain_id())
             # Hidden (a leading underscore): `ros2 node list --all` shows it.
-            keeper = rclpy.create_node(
-                '_sensors_participant', context=context, use_global_arguments=False,
+            keepers = tuple(rclpy.create_node(
+                name, context=kept, use_global_arguments=False,
                 start_parameter_services=False, enable_rosout=False)
-            _contexts[key] = (context, keeper)
+                for name, kept in (('_sensors_participant', context),
+                                   ('_sensors_neighbour', world_context)))
+            _contexts[key] = (context, keepers)
             world_context.on_shutdown(lambda: _end_sensor_context(key))
         return _contexts[key][0]
 
 
 def _end_sensor_context(key):
     with _lock:
-        context, keeper = _contexts.pop(key, (None, None))
+        context, keepers = _contexts.pop(key, (None, ()))
     if context is not None:
-        keeper.destroy_node()
+        sensors_keeper, world_keeper = keepers
+        sensors_keeper.destroy_node()
         context.try_shutdown()
+        world_keeper.destroy_node()  # the last participant of the domain here, if no other
 
 
 @atexit.register
