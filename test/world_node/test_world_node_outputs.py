@@ -279,17 +279,22 @@ def test_a_stop_signal_ends_the_world_quietly_whatever_it_was_doing(
     # callback, mostly while it publishes; SIGINT too, in a program started where it is ignored.
     clock = []
     ros.client_node.create_subscription(Clock, '/clock', clock.append, TIME_SOURCE)
-    for _ in range(3):
+    # Each world has its own namespace: the graph may still list the services of the world
+    # just stopped, and a call sent to them would never be answered.
+    for start in range(3):
+        namespace = f'/stopped_{int(real_time_factor)}_{start}'
         world = start_program([sys.executable, '-m', 'service_tutorial.world_node.node',
-                               '--ros-args', '-p', f'real_time_factor:={real_time_factor}'],
-                              cwd=ROOT)
+                               '--ros-args', '-r', f'__ns:={namespace}',
+                               '-p', f'real_time_factor:={real_time_factor}'], cwd=ROOT)
         try:
-            response = ros.call(SpawnModel, '/mujoco/spawn_urdf_model', SpawnModel.Request(
-                model_name='r2d2', model_xml=read_model('r2d2')), timeout=60.0)
+            response = ros.call(SpawnModel, f'{namespace}/mujoco/spawn_urdf_model',
+                                SpawnModel.Request(model_name='r2d2',
+                                                   model_xml=read_model('r2d2')), timeout=60.0)
             assert response.success, response.status_message
             clock.clear()
             assert ros.wait_for(lambda: len(clock) >= 20), 'the world does not step'
         finally:
             world.send_signal(signal.SIGTERM)
             stderr = world.communicate(timeout=30.0)[1]
+            print(f'the world in {namespace} wrote:', stderr, sep='\n')
         assert world.returncode == 0 and 'Traceback' not in stderr, stderr
