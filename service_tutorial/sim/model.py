@@ -37,6 +37,7 @@ class Model:
         self.spawn_position = np.array(position, dtype=float)
         self.spawn_orientation = np.array(orientation, dtype=float)
         self.frame = None  # the frame of the world's spec the model's root is attached to
+        self.group = None  # the attachment.Group it came in with, if it came in one
         self.plugins = tuple(plugins.plugin_class(setup.kind)(setup.config, setup.block)
                              for setup in description.plugins)
         # When the world last placed it (spawn, set state, reset), and whether the world has
@@ -91,11 +92,20 @@ class Model:
             position, orientation = self.spawn_position, self.spawn_orientation
         else:
             position, orientation = np.array(self.frame.pos), np.array(self.frame.quat)
-        self.frame = spec.worldbody.add_frame(pos=position, quat=orientation)
+        # Named by the prefix alone, which no element of the model's can be: moved_into()
+        # finds it by name.
+        self.frame = spec.worldbody.add_frame(pos=position, quat=orientation,
+                                              name=self.scoped(''))
+        self.group = None
         # The world's spec copies what it attaches (copy_during_attach), so the description,
         # shared by every model spawned from the same URDF, stays as it was loaded.
         self.frame.attach_body(self.description.spec.worldbody.first_body(),
                                self.name + SCOPE_SEPARATOR, '')
+
+    def moved_into(self, spec, group):
+        """Take up the model's frame in spec, where the spec it was attached to was attached."""
+        self.frame = spec.frame(self.scoped(''))
+        self.group = group
 
     def detach(self, spec):
         """
@@ -106,6 +116,9 @@ class Model:
         by name. Each delete costs MuJoCo a pass over the whole spec, hence one for the tree.
         """
         spec.delete(self.frame)
+        if self.group is not None:
+            self.group.leave(spec, self)
+            self.group = None
         robot = self.description.spec
         for assets, find in ((robot.meshes, spec.mesh), (robot.materials, spec.material),
                              (robot.textures, spec.texture)):

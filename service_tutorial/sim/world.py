@@ -35,7 +35,8 @@ _logger = core_logger('service_tutorial.world')
 
 
 def _log_mujoco_warning(message):
-    _logger.warning('MuJoCo: %s', message)
+    if not message.startswith(attachment.EMPTY_PREFIX_WARNING):
+        _logger.warning('MuJoCo: %s', message)
 
 
 def _route_mujoco_messages():

@@ -4,10 +4,12 @@ import os
 import shutil
 
 import mujoco
+import numpy as np
 import pytest
 from repository import model_path, R2D2, read_file, TEST_MODELS, TINYBOT
 from service_tutorial.sim.description import UrdfError
 from service_tutorial.sim.description_cache import DescriptionCache
+from service_tutorial.sim.spawning import SpawnOrder
 from service_tutorial.sim.validation import WorldError
 from service_tutorial.sim.world import World
 
@@ -40,6 +42,31 @@ def test_a_deleted_robot_leaves_nothing_behind(path):
     world.spawn_urdf_file('visitor', path, position=(3.0, 0.0, 0.5))
     world.step(10)
     assert world.model_names() == ['first', 'visitor']
+
+
+def test_a_deleted_batch_leaves_nothing_behind_and_every_other_robot_its_state():
+    # A batch goes into the world's spec in groups (attachment.GROUP_SIZE): robots leave a
+    # group in any order, and the last to leave takes the group's frame with it.
+    world, fresh = World(), World()
+    for one in (world, fresh):
+        one.spawn_urdf_file('first', TINYBOT)
+    world.models['first'].drive().command_velocity(0.2, 0.5)
+    urdf = read_file(TINYBOT)
+    for _ in range(2):
+        world.spawn_urdf_batch([SpawnOrder(f'tiny{index}', urdf, position=(2.0, index, 0.0))
+                                for index in range(7)])
+        world.step(50)
+        for name in ('tiny3', 'tiny0', 'tiny6', 'tiny1', 'tiny2', 'tiny5', 'tiny4'):
+            kept = {other: world.get_model_state(other)
+                    for other in world.model_names() if other != name}
+            world.delete_model(name)
+            for other, state in kept.items():
+                after = world.get_model_state(other)
+                assert np.array_equal(after.position, state.position), other
+                assert np.array_equal(after.linear_velocity, state.linear_velocity), other
+            world.step(10)
+        assert contents(world) == contents(fresh)
+        assert len(world._spec.frames) == len(fresh._spec.frames)
 
 
 def test_a_robot_spawned_again_reuses_its_description():
