@@ -11,8 +11,13 @@ where a stream that carries the world's state (odometry, joint states) falls due
 tells the time, so it does not end chunks (TIME_ONLY_STREAMS): each of its turns that a chunk
 stepped past goes out after the chunk, stamped with the step at its turn. A chunk of 2 steps
 per /clock message cost more than the steps. Free-running (real_time_factor 0) a tick steps for
-a budget of wall time, and each stream is also held to its rate in wall time, so every stream
-ends chunks: far faster than real time, the simulated rates would cost more than the physics.
+a budget of wall time, and each stream is also held to its rate in wall time: far faster than
+real time, the simulated rates would cost more than the physics. The streams of state end
+chunks at their turns in wall time, /clock goes out after the first chunk past its turn. What a
+step costs is learnt as the world steps (_learn_step_cost), and chunks end within WALL_SLACK of
+a turn or a tick's deadline: 10,000 steps of ten robots on request took about 100 chunks, where
+chunks that each ended at /clock's turn, just short of it, took 1,100 (a tenth of the time
+went to the chunks and not to the physics).
 
 The executor's turn between two ticks costs CPU time that grows with the node's topics (about
 0.4 ms with 50 robots in real time), so ticks are spaced to keep it a small share of the time.
@@ -65,6 +70,12 @@ MAX_REAL_TIME_PERIOD = 0.02
 MAX_TICK_SIMULATED = 0.02
 PAUSED_TICK_PERIOD = 0.02
 PAUSED_CLOCK_PERIOD = 0.1
+# Free-running, a stream is due this share of its period before its turn in wall time, and a
+# tick ends this share of its budget before its deadline: a chunk's steps are estimated, and
+# a chunk of the few steps left before a turn costs more than the steps.
+WALL_SLACK = 0.1
+# What a step costs is learnt from the chunks of steps: each sum keeps this much of the last.
+COST_MEMORY = 0.8
 # Further behind real time than this (s), the machine cannot keep up: do not try to catch up.
 MAX_LAG = 0.1
 # The longest rest after a tick that ran past its budget, in s of wall time.
@@ -93,6 +104,7 @@ class Pacer:
         self._wall_clock = wall_clock
         self._cpu_clock = cpu_clock
         self.step_wall_time = 1e-5  # running estimate of one physics step, in wall seconds
+        self._cost_steps = self._cost_seconds = 0.0  # its sums (_learn_step_cost)
         self.executor_turn = 0.0  # running estimate of the CPU time between two ticks
         self._tick_end_cpu = None
         self._tick_started = 0.0  # wall time
@@ -252,8 +264,7 @@ class Pacer:
                                           / max(self.step_wall_time, 1e-7))))
             yield steps
             behind -= steps
-            self.step_wall_time += 0.5 * (
-                (self._wall_clock() - start) / steps - self.step_wall_time)
+            self._learn_step_cost(steps, self._wall_clock() - start)
 
     def requested_chunks(self, count, sim_time, other_due=lambda: math.inf):
         """
@@ -269,13 +280,27 @@ class Pacer:
         deadline = self._wall_clock() + budget
         while limit > 0:
             start = self._wall_clock()
-            if start >= deadline:
+            # A chunk of the last few steps would cost more than the steps: the next tick
+            # comes at once anyway (free-running, ticks are back to back).
+            if start >= deadline - WALL_SLACK * budget:
                 return
             steps = min(limit, self.free_running_chunk(sim_time(), start, deadline, other_due()))
             limit -= steps
             yield steps
-            self.step_wall_time += 0.5 * (
-                (self._wall_clock() - start) / steps - self.step_wall_time)
+            self._learn_step_cost(steps, self._wall_clock() - start)
+
+    def _learn_step_cost(self, steps, seconds):
+        """
+        Follow what a step costs from a chunk of steps that took seconds of wall time.
+
+        A ratio of sums over the last chunks: what a chunk costs besides its steps (publishing,
+        Python) weighs as little as it does in the stepping. An average of each chunk's seconds
+        per step took a chunk of one step, which costs about two, as the rule, and chunks shrank
+        before each stream's turn in wall time: four or five of them per turn instead of one.
+        """
+        self._cost_steps = COST_MEMORY * self._cost_steps + steps
+        self._cost_seconds = COST_MEMORY * self._cost_seconds + seconds
+        self.step_wall_time = self._cost_seconds / self._cost_steps
 
     def steps_to_next_due(self, now, other_due=math.inf, *, limit):
         """Return the steps until a stream of state (or other_due) falls due, 1 to limit."""
@@ -290,7 +315,7 @@ class Pacer:
         """Return the steps until a stream falls due (simulation and wall time) or deadline."""
         per_step = max(self.step_wall_time, 1e-7)
         steps = (deadline - wall) / per_step
-        for name in self._periods:
+        for name in self._state_streams:
             steps = min(steps, max((self._next_sim[name] - now) / self.timestep,
                                    (self._next_wall[name] - wall) / per_step))
         steps = min(steps, (other_due - now) / self.timestep)
@@ -313,7 +338,7 @@ class Pacer:
         due = []
         for name in self._periods:
             turn = self._next_sim[name]
-            if soon < turn or wall < self._next_wall[name]:
+            if soon < turn or wall < self._next_wall[name] - WALL_SLACK * self._periods[name]:
                 continue
             if name in TIME_ONLY_STREAMS and not self.free_running and now - turn < MAX_LAG:
                 period = self._periods[name]
@@ -332,7 +357,13 @@ class Pacer:
         """Schedule a stream's next turn after it was published at simulation time now."""
         period = self._periods[name]
         self._next_sim[name] = now + period
-        self._next_wall[name] = self._wall_clock() + period if self.free_running else 0.0
+        if self.free_running:
+            # Within the slack before its turn, a stream goes out early, and its next turn is
+            # a whole period after this one: on average, it keeps to its rate.
+            self._next_wall[name] = max(self._next_wall[name] + period,
+                                        self._wall_clock() + (1.0 - WALL_SLACK) * period)
+        else:
+            self._next_wall[name] = 0.0
 
     def set_period(self, name, period):
         """Give a stream another period (s); its next turn moves by the difference."""

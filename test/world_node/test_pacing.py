@@ -23,10 +23,11 @@ class FakeClock:
 class FakeWorld:
     """Counts steps like a world, costs wall time per step, and records what was published."""
 
-    def __init__(self, pacer, wall, step_cost=0.0):
+    def __init__(self, pacer, wall, step_cost=0.0, chunk_cost=0.0):
         self.pacer = pacer
         self.wall = wall
         self.step_cost = step_cost
+        self.chunk_cost = chunk_cost  # besides its steps: publishing, Python
         self.steps = 0
         self.chunks = []
         self.published = {name: [] for name in RATES}
@@ -41,7 +42,7 @@ class FakeWorld:
         """Do what the node's step callback does: step chunk by chunk, publish what is due."""
         for steps in self.pacer.chunks(lambda: self.time, lambda: self.other_due):
             self.steps += steps
-            self.wall.now += steps * self.step_cost
+            self.wall.now += steps * self.step_cost + self.chunk_cost
             self.chunks.append(steps)
             self.publish_due()
         self.publish_due()
@@ -52,13 +53,13 @@ class FakeWorld:
             self.stamps[name].append(round(stamp / TIMESTEP))
 
 
-def make(real_time_factor, step_cost=0.0):
+def make(real_time_factor, step_cost=0.0, chunk_cost=0.0):
     """Return a pacer on fake clocks and a fake world it paces, anchored at time 0."""
     wall, cpu = FakeClock(), FakeClock()
     pacer = Pacer(timestep=TIMESTEP, real_time_factor=real_time_factor,
                   periods={name: 1.0 / rate for name, rate in RATES.items()},
                   wall_clock=wall, cpu_clock=cpu)
-    world = FakeWorld(pacer, wall, step_cost)
+    world = FakeWorld(pacer, wall, step_cost, chunk_cost)
     pacer.anchor(world.time)
     return pacer, world, wall, cpu
 
@@ -183,9 +184,25 @@ def test_free_running_steps_for_its_budget_and_holds_streams_to_their_wall_rate(
     assert wall.now - start == pytest.approx(pacing.STEP_BUDGET, abs=1e-4)
     assert world.steps == pytest.approx(500, abs=10)
     # In simulation time /clock would have gone out 250 times; in 5 ms of wall time it goes
-    # out twice (4 ms, 400 steps, apart), odometry once (every 20 ms). The first chunk is one
-    # step: every stream was due at once.
-    assert world.published['clock'] == [1, 401] and world.published['odom'] == [1]
+    # out twice, odometry once (every 20 ms). The first chunk is one step: every stream was
+    # due at once. /clock only tells the time: it does not end a chunk, but goes out after
+    # the first chunk past its turn (every 4 ms), here the tick's last.
+    assert world.published['clock'] == [1, 500] and world.published['odom'] == [1]
+    assert world.chunks == [1, 499]
+
+
+def test_free_running_chunks_end_at_a_turn_however_much_a_chunk_costs_besides_its_steps():
+    # A chunk that costs a step more than its steps (publishing, Python) does not make the
+    # chunks shrink before each turn: a tick of 5 ms steps to odometry's turn (every 20 ms)
+    # or its deadline, in one chunk each.
+    pacer, world, wall, _ = make(0.0, step_cost=1e-4, chunk_cost=1e-4)
+    for _ in range(10):
+        world.tick()
+    chunks = len(world.chunks)
+    for _ in range(40):  # 200 ms: 40 deadlines and 10 turns of odometry
+        world.tick()
+    assert len(world.chunks) - chunks <= 55
+    assert len(world.published['odom']) == pytest.approx(wall.now / 0.02, abs=2)
 
 
 def test_free_running_learns_what_a_step_costs():
@@ -315,7 +332,7 @@ def test_steps_on_request_go_free_running_and_stop_at_the_count(real_time_factor
     # 5 ms of wall time at 10 us a step, whatever the real-time factor: 500 of 10**6 steps,
     # with streams held to their rates in wall time, as free-running.
     assert requested_tick(10 ** 6) == pytest.approx(500, abs=10)
-    assert world.published['clock'] == [1, 401] and world.published['odom'] == [1]
+    assert world.published['clock'] == [1, 500] and world.published['odom'] == [1]
     assert requested_tick(2 ** 64 - 1) == pytest.approx(500, abs=10)
     before = world.steps
     assert requested_tick(7) == 7 and world.steps == before + 7
