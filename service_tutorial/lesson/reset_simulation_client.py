@@ -9,8 +9,9 @@ import sys
 
 from rclpy.node import Node
 
-from service_tutorial.lesson.client_main import parse_client_arguments, program_arguments, run_node
+from service_tutorial.lesson.client_arguments import parse_client_arguments
 from service_tutorial.lesson.model_services import reset_simulation
+from service_tutorial.node_main import program_arguments, run_node
 
 
 def parse_arguments(argv):

@@ -46,8 +46,8 @@ from rclpy.duration import Duration
 from rclpy.node import Node
 from rclpy.task import Future
 from service_tutorial.conversions import seconds_of, yaw_of
-from service_tutorial.lesson.client_main import spin_node
 from service_tutorial.lesson.turning_limits import MAX_ANGLE, MAX_ANGULAR_VEL
+from service_tutorial.node_main import spin_node
 from srv_interfaces.action import TurnRobot
 
 # Below this yaw rate, in rad/s, the robot counts as at rest after it was told to stop.

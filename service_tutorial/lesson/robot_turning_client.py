@@ -13,11 +13,11 @@ import sys
 
 import rclpy
 from rclpy.node import Node
-from service_tutorial.lesson.client_main import program_arguments, run_node
 from service_tutorial.lesson.model_services import response_text
 from service_tutorial.lesson.turning_limits import ask_turning_request, given_or_asked
 from service_tutorial.lesson.turning_limits import MAX_ANGULAR_VEL
 from service_tutorial.lesson.turning_limits import parse_pair_or_nothing, parse_turning_request
+from service_tutorial.node_main import program_arguments, run_node
 from srv_interfaces.srv import ControlTurningMessage
 
 # What success false means; the answer has no room for the reason, the server's log has it.

@@ -13,8 +13,9 @@ import sys
 from rclpy.node import Node
 
 from service_tutorial.conversions import make_pose
-from service_tutorial.lesson.client_main import parse_client_arguments, program_arguments, run_node
+from service_tutorial.lesson.client_arguments import parse_client_arguments
 from service_tutorial.lesson.model_services import model_path, response_text, spawn_model
+from service_tutorial.node_main import program_arguments, run_node
 from service_tutorial.robot_files import parse_xacro_arguments, RobotFileError
 
 # The lesson's pose: z rotation of -pi/2 as a quaternion (x, y, z, w).

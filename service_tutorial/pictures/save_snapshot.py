@@ -9,8 +9,9 @@ ros2 command: `ros2 service call /mujoco/save_snapshot std_srvs/srv/Trigger`.
 import sys
 
 from rclpy.node import Node
-from service_tutorial.lesson.client_main import parse_client_arguments, program_arguments, run_node
+from service_tutorial.lesson.client_arguments import parse_client_arguments
 from service_tutorial.lesson.model_services import call, DEFAULT_TIMEOUT
+from service_tutorial.node_main import program_arguments, run_node
 from std_srvs.srv import Trigger
 
 # Relative, like the model services: /mujoco/save_snapshot from the root namespace.

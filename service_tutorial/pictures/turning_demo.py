@@ -31,8 +31,8 @@ from rclpy.node import Node
 from rclpy.signals import SignalHandlerOptions
 from service_tutorial.conversions import make_pose, seconds_of, yaw_of
 from service_tutorial.lesson import model_services
-from service_tutorial.lesson.client_main import program_arguments
 from service_tutorial.lesson.model_services import response_text
+from service_tutorial.node_main import program_arguments
 from service_tutorial.pictures.recording import TurnRecorder
 from srv_interfaces.action import TurnRobot
 from srv_interfaces.srv import ControlTurningMessage, DeleteModel, GetModelState, SpawnModel

@@ -27,12 +27,12 @@ from ament_index_python.packages import get_package_share_directory
 import rclpy
 from rclpy.clock import Clock as WallClock, ClockType
 from rclpy.event_handler import PublisherEventCallbacks
-from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from rclpy.task import Future
 from rosgraph_msgs.msg import Clock
 from service_tutorial.conversions import fill_time_msg
+from service_tutorial.node_main import run_node
 from service_tutorial.robot_files import file_model_name, read_robot_file
 from service_tutorial.sim import frames
 from service_tutorial.sim.recovery import Removal
@@ -459,22 +459,9 @@ def main(args=None):
 
     A bad parameter ends it with one line, status 2.
     """
-    rclpy.init(args=args)
-    world = None
-    try:
-        world = run_or_exit('mujoco_world', MujocoWorld)
-        rclpy.spin_until_future_complete(world, world.quitting)
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    except Exception:
-        # Ctrl-C or SIGTERM shuts the context down under a running callback (the step
-        # publishing) or the executor's wait, which then fails: the world stopping, no error.
-        if rclpy.ok():
-            raise
-    finally:
-        if world is not None:
-            world.destroy_node()
-        rclpy.try_shutdown()
+    return run_node(lambda: run_or_exit('mujoco_world', MujocoWorld),
+                    lambda world: rclpy.spin_until_future_complete(world, world.quitting),
+                    args=args, interrupted_status=None)
 
 
 if __name__ == '__main__':

@@ -3,33 +3,20 @@ The main() of every executable here: rclpy up, one node, its work, and a clean s
 
 rclpy.init() comes first, then the node is made and does its work; Ctrl-C (KeyboardInterrupt)
 and a shutdown from outside (ExternalShutdownException) end it quietly, and in every case the
-node is destroyed and rclpy shut down. Errors the program expects are printed as
+node is destroyed and rclpy shut down. Errors a program expects are printed as
 '<program>: <error>' on stderr and give exit status 1.
 """
 
-import argparse
 import sys
 
 import rclpy
 from rclpy.executors import ExternalShutdownException
 from rclpy.utilities import remove_ros_args
-from service_tutorial.lesson.model_services import DEFAULT_TIMEOUT
 
 
 def program_arguments(args=None):
     """Return the program's own arguments: args or sys.argv without its name and ROS part."""
     return remove_ros_args(sys.argv if args is None else args)[1:]
-
-
-def parse_client_arguments(argv, prog, description, add_arguments=None):
-    """Parse a world service client's command line: its own arguments, then --timeout."""
-    parser = argparse.ArgumentParser(prog=prog, description=description)
-    if add_arguments is not None:
-        add_arguments(parser)
-    parser.add_argument('--timeout', type=float, default=DEFAULT_TIMEOUT,
-                        help='seconds to wait for the service and its answer '
-                             '(default: %(default)s)')
-    return parser.parse_args(argv)
 
 
 def run_node(make_node, work, *, args=None, program='', errors=(), interrupted_status=1):
