@@ -101,6 +101,7 @@ class Pacer:
         self._state_streams = [name for name in self._periods if name not in TIME_ONLY_STREAMS]
         self._next_sim = dict.fromkeys(self._periods, 0.0)
         self._next_wall = dict.fromkeys(self._periods, 0.0)
+        self._published_at = dict.fromkeys(self._periods)  # simulation time, or None
         self._wall_clock = wall_clock
         self._cpu_clock = cpu_clock
         self.step_wall_time = 1e-5  # running estimate of one physics step, in wall seconds
@@ -357,6 +358,7 @@ class Pacer:
         """Schedule a stream's next turn after it was published at simulation time now."""
         period = self._periods[name]
         self._next_sim[name] = now + period
+        self._published_at[name] = now
         if self.free_running:
             # Within the slack before its turn, a stream goes out early, and its next turn is
             # a whole period after this one: on average, it keeps to its rate.
@@ -364,6 +366,11 @@ class Pacer:
                                         self._wall_clock() + (1.0 - WALL_SLACK) * period)
         else:
             self._next_wall[name] = 0.0
+
+    def went_out_at(self, name, now):
+        """Tell whether a stream was last published at simulation time now (published())."""
+        last = self._published_at[name]
+        return last is not None and abs(last - now) < 0.5 * self.timestep
 
     def set_period(self, name, period):
         """Give a stream another period (s); its next turn moves by the difference."""

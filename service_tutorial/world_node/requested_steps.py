@@ -13,7 +13,8 @@ and after how many steps. The world stays paused throughout.
 import time
 
 from rclpy.task import Future
-from service_tutorial.world_node.pacing import JOINT_STATES_STREAM, ODOMETRY_STREAM
+from service_tutorial.world_node.pacing import CLOCK_STREAM, JOINT_STATES_STREAM
+from service_tutorial.world_node.pacing import ODOMETRY_STREAM
 
 # Wall time between two progress reports of a request, in s: 10 Hz, and one at the end.
 PROGRESS_PERIOD = 0.1
@@ -96,9 +97,12 @@ class RequestedSteps:
             request.report_progress()
             return
         pacer.step_on_request(False)
-        # Where the steps ended, whatever the streams' rates: the time, odometry, joint states.
-        node.publish_clock()
-        pacer.restart(world.time, STATE_STREAMS)
+        # Where the steps ended, whatever the streams' rates: the time, odometry, joint states,
+        # each unless the last chunk's turn already sent it there (no stamp goes out twice).
+        now = world.time
+        if not pacer.went_out_at(CLOCK_STREAM, now):
+            node.publish_clock()
+        pacer.restart(now, [name for name in STATE_STREAMS if not pacer.went_out_at(name, now)])
         node.publish_due()
         self.current = None
         request.end()

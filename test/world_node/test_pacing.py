@@ -389,3 +389,15 @@ def test_after_a_tick_back_to_back_the_next_turn_goes_to_the_calls_waiting():
     world.tick()
     pacer.end_tick()
     assert not pacer.resting()
+
+
+def test_a_stream_tells_the_step_it_last_went_out_at():
+    # Steps on request end by sending the streams where they ended, unless a chunk's turn
+    # just sent them there: no stamp goes out twice.
+    pacer, world, wall, _ = make(0.0, step_cost=1e-5)
+    assert not pacer.went_out_at('odom', 0.0)
+    world.tick()
+    last = world.published['odom'][-1] * TIMESTEP
+    assert pacer.went_out_at('odom', last)
+    assert not pacer.went_out_at('odom', last + TIMESTEP)
+    assert not pacer.went_out_at('odom', last - TIMESTEP)
