@@ -272,6 +272,28 @@ def test_the_log_handler_leaves_with_the_node(rclpy_session):
     assert handlers() == [] and core.level == level
 
 
+def spawn_r2d2(ros, namespace, *, tries=4):
+    """
+    Spawn R2-D2 into a world just started, asking again if no answer comes.
+
+    A world just started can answer before it has matched the caller's response reader, and
+    that answer is lost (CI saw Fast DDS's 'failed to send response (timeout)'). Asked again,
+    the world says R2-D2 exists when the first request did spawn it.
+    """
+    request = SpawnModel.Request(model_name='r2d2', model_xml=read_model('r2d2'))
+    for attempt in range(tries):
+        try:
+            response = ros.call(SpawnModel, f'{namespace}/mujoco/spawn_urdf_model', request,
+                                timeout=15.0)
+        except AssertionError:
+            if attempt == tries - 1:
+                raise
+            continue
+        assert response.success or (attempt > 0 and 'already exists' in response.status_message), \
+            response.status_message
+        return
+
+
 @pytest.mark.parametrize('real_time_factor', [0.0, 1.0])
 def test_a_stop_signal_ends_the_world_quietly_whatever_it_was_doing(
         ros, start_program, real_time_factor):
@@ -287,10 +309,7 @@ def test_a_stop_signal_ends_the_world_quietly_whatever_it_was_doing(
                                '--ros-args', '-r', f'__ns:={namespace}',
                                '-p', f'real_time_factor:={real_time_factor}'], cwd=ROOT)
         try:
-            response = ros.call(SpawnModel, f'{namespace}/mujoco/spawn_urdf_model',
-                                SpawnModel.Request(model_name='r2d2',
-                                                   model_xml=read_model('r2d2')), timeout=60.0)
-            assert response.success, response.status_message
+            spawn_r2d2(ros, namespace)
             clock.clear()
             assert ros.wait_for(lambda: len(clock) >= 20), 'the world does not step'
         finally:
