@@ -131,6 +131,9 @@ def targets(tables):
         for row in by_key['standard_interfaces'].rows:
             if row[5] is not None:
                 rows.append([f'{row[0]} (ms)', row[2], row[5], row[6]])
+    if 'world_loading' in by_key:
+        for row in by_key['world_loading'].rows:
+            rows.append([f'{row[0]} (ms)', row[2], row[6], row[7]])
     if 'web' in by_key:
         for row in by_key['web'].rows:
             rows.append([f'{row[0]} ratio, {row[1]} robot(s)', row[4], row[5], row[6]])

@@ -16,8 +16,9 @@ as JSON (output/benchmark.json unless --json says otherwise). What runs where:
   MuJoCo calls, and mujoco_world as a process with and without a subscriber to a laser;
 - answers that need no simulation: model_services without a world, and robot_turning_server
   in this process;
-- the standard simulation interfaces (SpawnEntities, StepSimulation, GetEntitiesStates): the
-  world node in this process, paused, against MuJoCo's own batch, bare mj_step and the World;
+- the standard simulation interfaces (SpawnEntities, StepSimulation, GetEntitiesStates,
+  LoadWorld): the world node in this process, paused, against MuJoCo's own batch, bare mj_step
+  and the World;
 - the web page's cost: mujoco_world as a process with web:=false and web:=true, and with one
   headless Chromium on its page.
 
@@ -46,6 +47,7 @@ from standard_interfaces import standard_table
 from startup import startup_table
 from turning import turning_tables
 from web_page import web_table
+from world_loading import worlds_table
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 DEFAULT_JSON = os.path.join(ROOT, 'output', 'benchmark.json')
@@ -129,7 +131,7 @@ def run(config, *, sections=SECTIONS, report=print):
         'camera': lambda: [camera_table(observer, config)],
         'sensors': lambda: [sensor_table(observer, config)],
         'answers': lambda: [answers_table(observer, config)],
-        'standard': lambda: [standard_table(observer, config)],
+        'standard': lambda: [standard_table(observer, config), worlds_table(observer, config)],
         'web': lambda: [web_table(observer, config)],
     }
     try:

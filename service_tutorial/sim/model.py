@@ -205,6 +205,12 @@ class Model:
         for plugin in self.plugins:
             plugin.reset()
 
+    def return_to_spawn(self, mj_model):
+        """Mark the model placed after a reset; one without a free joint goes back in place."""
+        self.mark_placed()
+        if self.anchored:
+            self.place_anchored(mj_model, self.spawn_position, self.spawn_orientation)
+
     def place_anchored(self, mj_model, position, orientation):
         """Move a model that has no free joint, in the compiled model and in the spec."""
         mj_model.body_pos[self.root_id] = position

@@ -1,5 +1,6 @@
 """The world every model is spawned into: physics options, ground, sky, sun and scenery."""
 
+import dataclasses
 import functools
 
 import mujoco
@@ -49,6 +50,19 @@ def _add_textures(spec):
     material = spec.add_material(name='ground_grid', texrepeat=[1.0, 1.0],
                                  texuniform=True, reflectance=0.1)
     material.textures[mujoco.mjtTextureRole.mjTEXROLE_RGB] = 'ground_grid'
+
+
+@dataclasses.dataclass(frozen=True)
+class Scene:
+    """What every spec a world builds starts from: its physics options and its scenery."""
+
+    timestep: float
+    gravity: tuple
+    scenery: object = None  # a scenery.Scenery, or None for the bare plane
+
+    def spec(self):
+        """Return a new spec of the world without models."""
+        return make_scene(self.timestep, self.gravity, self.scenery)
 
 
 def make_scene(timestep, gravity, scenery=None):

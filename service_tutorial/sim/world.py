@@ -6,7 +6,7 @@ Models are attached to the live spec and the model is recompiled in place, so sp
 deleting one model leaves the state of every other model exactly as it was.
 """
 
-import functools
+import dataclasses
 import math
 import os
 import types
@@ -60,8 +60,8 @@ class World:
         """
         Create a world without models, with the static obstacles of a scenery file if given.
 
-        package_resolver maps a package name to its share folder, for package:// meshes (none:
-        refused); background_rendering draws cameras on a thread (background_renders.py).
+        scenery: a path or a Scenery; package_resolver maps a package to its share folder, for
+        package:// meshes (none: refused); background_rendering draws cameras on a thread.
         """
         timestep = validation.finite_number(timestep, 'timestep')
         if timestep <= 0.0:
@@ -76,11 +76,10 @@ class World:
         self._descriptions = DescriptionCache(package_resolver, timestep)
         self._next_event = math.inf
         self._kinematics_fresh = False
-        # What every spec the world builds starts from: physics options, ground, scenery.
-        self._make_scene = functools.partial(
-            scene.make_scene, timestep, gravity,
-            Scenery(scenery, package_resolver=package_resolver) if scenery else None)
-        self._spec = self._make_scene()
+        if isinstance(scenery, str):
+            scenery = Scenery(scenery, package_resolver=package_resolver) if scenery else None
+        self._scene = scene.Scene(timestep, gravity, scenery)
+        self._spec = self._scene.spec()
         self._model = self._spec.compile()
         self._data = mujoco.MjData(self._model)
         self._recovery = Recovery(self)
@@ -221,10 +220,17 @@ class World:
         self.forward()
         _logger.info("deleted model '%s'", name)
 
+    def load(self, scenery):
+        """Take a new scenery (a Scenery or None) with no models, at time 0 and paused."""
+        self._scene = dataclasses.replace(self._scene, scenery=scenery)
+        self._paused = True
+        self.rebuild({})
+        self._reset(keep_time=False)
+
     def rebuild(self, models):
         """Build spec, model and data afresh with just the given models, their state kept."""
         saved = attachment.saved_state(models, self._data)
-        self._spec, self._model, data = attachment.build(self._make_scene(), models)
+        self._spec, self._model, data = attachment.build(self._scene.spec(), models)
         data.time = self._data.time
         self._data, self._models = data, models
         self._after_recompile(models.values())
@@ -329,9 +335,7 @@ class World:
         if keep_time:
             self._data.time = time
         for model in self._models.values():
-            model.mark_placed()
-            if model.anchored:
-                model.place_anchored(self._model, model.spawn_position, model.spawn_orientation)
+            model.return_to_spawn(self._model)
         self.forward()
         for model in self._models.values():
             model.reset_plugins()

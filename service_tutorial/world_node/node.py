@@ -20,7 +20,6 @@ effect as soon as it is set. What the simulation logs reaches the node's logger 
 """
 
 import inspect
-import os
 import time
 
 from ament_index_python.packages import get_package_share_directory
@@ -33,8 +32,6 @@ from rclpy.task import Future
 from rosgraph_msgs.msg import Clock
 from service_tutorial.conversions import fill_time_msg
 from service_tutorial.node_main import run_node
-from service_tutorial.robot_files import file_model_name, read_robot_file
-from service_tutorial.sim import frames
 from service_tutorial.sim.recovery import Removal
 from service_tutorial.sim.validation import quoted
 from service_tutorial.sim.validation import WorldError
@@ -44,7 +41,8 @@ from service_tutorial.world_node.log_forwarding import forward_core_logs
 from service_tutorial.world_node.model_interface import ModelInterface
 from service_tutorial.world_node.pacing import CLOCK_STREAM, JOINT_STATES_STREAM
 from service_tutorial.world_node.pacing import ODOMETRY_STREAM, Pacer
-from service_tutorial.world_node.parameters import declare_world_parameters, run_or_exit
+from service_tutorial.world_node.parameters import declare_world_parameters, default_parameters
+from service_tutorial.world_node.parameters import run_or_exit
 from service_tutorial.world_node.requested_steps import RequestedSteps
 from service_tutorial.world_node.ros_names import normalise_namespace
 from service_tutorial.world_node.sensor_node import SensorNode
@@ -52,6 +50,7 @@ from service_tutorial.world_node.standard.features import FeatureService
 from service_tutorial.world_node.standard.simulation import SimulationServices
 from service_tutorial.world_node.standard.stepping import SteppingServices
 from service_tutorial.world_node.tf_publishing import TransformBatch
+from service_tutorial.world_node.viewer import PassiveViewer
 from srv_interfaces.msg import RemovedModel
 
 PACKAGE = 'service_tutorial'
@@ -66,27 +65,6 @@ REMOVED_MODELS_QOS = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE
 # The parameter that gives each publication stream its rate, in Hz.
 RATE_PARAMETERS = {CLOCK_STREAM: 'clock_publish_rate', ODOMETRY_STREAM: 'odom_publish_rate',
                    JOINT_STATES_STREAM: 'joint_state_publish_rate'}
-
-
-def resolve_model_path(model):
-    """Find a model (URDF or xacro) or scenery file: an absolute path, or one in models/."""
-    if os.path.isabs(model):
-        return model
-    return os.path.join(get_package_share_directory(PACKAGE), 'models', model)
-
-
-def start_up_models(parameters):
-    """Return (file, name, namespace, position, orientation) of each model present at start."""
-    files = list(parameters['models'])
-    names = list(parameters['model_names']) or [file_model_name(f) for f in files]
-    namespaces = list(parameters['model_namespaces']) or [''] * len(files)
-    poses = list(parameters['model_poses']) or [0.0] * 4 * len(files)
-    if not len(files) == len(names) == len(namespaces) == len(poses) // 4:
-        raise ValueError('models, model_names, model_namespaces and model_poses '
-                         '(4 numbers each) must describe the same number of models')
-    return [(resolve_model_path(model), name, namespace, poses[4 * index:4 * index + 3],
-             frames.yaw_quaternion(poses[4 * index + 3]))
-            for index, (model, name, namespace) in enumerate(zip(files, names, namespaces))]
 
 
 def left_out_of(description):
@@ -147,11 +125,15 @@ class MujocoWorld(Node):
         # before the simulation's imports (yourdfpy and trimesh take over a second).
         from service_tutorial.sim.world import World
         from service_tutorial.world_node.standard.entities import EntityServices
-        scenery = parameters['scenery']
+        from service_tutorial.world_node.standard.named_poses import NamedPoseServices
+        from service_tutorial.world_node.standard.worlds import WorldServices
+        from service_tutorial.world_node.world_loader import resolve_model_path, WorldLoader
+        self.world_loader = WorldLoader(self, get_package_share_directory)
+        start_up = self.world_loader.start_up_world(parameters, default_parameters())
         self.world = World(timestep=parameters['timestep'],
                            cmd_vel_timeout=parameters['cmd_vel_timeout'],
                            package_resolver=get_package_share_directory,
-                           scenery=resolve_model_path(scenery) if scenery else None,
+                           scenery=start_up and start_up.scenery,
                            background_rendering=True)  # a camera never holds up an answer
         self.pacer = Pacer(timestep=self.world.timestep,
                            real_time_factor=parameters['real_time_factor'],
@@ -163,7 +145,6 @@ class MujocoWorld(Node):
         # Made after the service callback that spawned returns, before the next step.
         self._topics_due = self.create_guard_condition(self.make_model_topics)
         self._next_face_look = 0.0  # wall time
-        self.viewer = None
         self.requested_steps = RequestedSteps(self)  # StepSimulation, SimulateSteps
         self.quitting = Future()  # done when a client asks the world to quit: main() ends
 
@@ -183,22 +164,18 @@ class MujocoWorld(Node):
         # The ROS 2 standard simulation interfaces, relative to the node's namespace.
         simulation = SimulationServices(self)
         self.stepping_services = SteppingServices(self, simulation)
-        self.standard_groups = [simulation, self.stepping_services, EntityServices(self)]
+        self.standard_groups = [
+            simulation, self.stepping_services, EntityServices(self),
+            WorldServices(self, simulation, get_package_share_directory),
+            NamedPoseServices(self)]
         self.feature_service = FeatureService(self, self.standard_groups)
         # ~/camera/image_raw, ~/camera/camera_info (camera_enabled) and ~/save_snapshot.
         self.camera_stream = CameraStream(self, self.world, parameters)
 
-        for path, name, namespace, position, orientation in start_up_models(parameters):
-            robot_file = read_robot_file(path)
-            self.spawn_model(name, robot_file.urdf, namespace, position, orientation, '',
-                             base_dir=robot_file.base_dir)
-        self.make_model_topics()
-        # What a reset of spawned entities keeps: these very models, not others by their names.
-        self.start_up_models = frozenset(self.world.models.values())
+        self.viewer = PassiveViewer(self.world, self.get_logger(), enabled=parameters['gui'])
+        self.world_loader.begin(start_up)
         if parameters['paused']:
             self.world.pause()
-        if parameters['gui']:
-            self._open_viewer()
         self.web_page = None
         if parameters['web']:
             from service_tutorial.world_node.web.page import WebPage
@@ -275,8 +252,7 @@ class MujocoWorld(Node):
                 world.step(steps)
                 self.publish_due()
         self.publish_due()
-        if self.viewer is not None:
-            self._sync_viewer()
+        self.viewer.sync()
         if self.web_page is not None:
             self.web_page.tick()  # returns at once while no browser is connected
         # Steps on request (paused) keep every turn: with another Python thread in the process
@@ -329,12 +305,12 @@ class MujocoWorld(Node):
                     base_dir=None):
         """Add a model to the world and give it its ROS interface; return what was left out."""
         # Refused before the world is asked: a bad namespace leaves the world untouched.
+        self.world_loader.check_loaded(f'spawning {quoted(name)}')
         namespace = normalise_namespace(namespace)
         model = self.world.spawn_urdf(name, urdf, position=position, orientation=orientation,
                                       reference_frame=reference_frame, base_dir=base_dir)
         self._give_interface(model, namespace, urdf)
-        if self.viewer is not None:
-            self._open_viewer()
+        self.viewer.reopen()
         # The world's log has already named each of them, with the reason.
         return left_out_of(model.description)
 
@@ -346,6 +322,7 @@ class MujocoWorld(Node):
         left out of its model ('' for nothing) or the exception that refused it (a WorldError
         unless a bug).
         """
+        self.world_loader.check_loaded('spawning')
         outcomes = self.world.spawn_urdf_batch(orders)
         for index, (order, namespace) in enumerate(zip(orders, namespaces)):
             if not isinstance(outcomes[index], WorldError):
@@ -354,8 +331,7 @@ class MujocoWorld(Node):
                     outcomes[index] = left_out_of(outcomes[index].description)
                 except Exception as error:  # the model is gone again; the others go on
                     outcomes[index] = error
-        if self.viewer is not None:
-            self._open_viewer()
+        self.viewer.reopen()
         return outcomes
 
     def _give_interface(self, model, namespace, urdf):
@@ -392,8 +368,7 @@ class MujocoWorld(Node):
         """Remove a model from the world along with its ROS interface."""
         self.world.delete_model(name)
         self._forget_model(name)
-        if self.viewer is not None:
-            self._open_viewer()
+        self.viewer.reopen()
 
     def holding_time(self, operation):
         """Return operation, made to hold simulation time for as long as it runs."""
@@ -419,28 +394,9 @@ class MujocoWorld(Node):
         self.publish_clock()
         self.publish_due()
 
-    # --- viewer -------------------------------------------------------------------------------
-
-    def _open_viewer(self):
-        """(Re)open MuJoCo's passive viewer on the current model; spawns rebuild the model."""
-        import mujoco.viewer
-        if self.viewer is not None:
-            self.viewer.close()
-        try:
-            self.viewer = mujoco.viewer.launch_passive(self.world.model, self.world.data)
-        except Exception as error:  # no display, no OpenGL
-            self.viewer = None
-            self.get_logger().error(f'gui:=true but the viewer could not open: {error}')
-
-    def _sync_viewer(self):
-        if self.viewer.is_running():
-            self.viewer.sync()
-
     def destroy_node(self):
         """Close the viewer and the action server along with the node; stop passing logs on."""
-        if self.viewer is not None:
-            self.viewer.close()
-            self.viewer = None
+        self.viewer.close()
         if self.web_page is not None:
             self.web_page.close()
             self.web_page = None

@@ -192,9 +192,15 @@ WORLD_PARAMETERS = (
         'stops; 0.0: never',
         minimum=0.0),
     ParameterSpec(
+        'world', 'yard',
+        "The world loaded at start-up: a world's name (a worlds/<name>.world.xml of this or "
+        'any installed package), a package:// uri or an absolute path of a world file',
+        read_only=True),
+    ParameterSpec(
         'models', ['tinybot.urdf'],
-        "Models spawned at start-up: URDF or xacro files in the package's models/ folder or "
-        'absolute paths',
+        "Models spawned at start-up, in place of the world's own unless models, model_names, "
+        'model_namespaces and model_poses are all at their defaults: URDF or xacro files in '
+        "the package's models/ folder or absolute paths",
         non_empty_items=True, read_only=True),
     ParameterSpec(
         'model_names', ['tinybot'],
@@ -211,8 +217,9 @@ WORLD_PARAMETERS = (
         multiple_of=4, read_only=True),
     ParameterSpec(
         'scenery', 'yard.urdf',
-        "Static obstacles loaded at start-up: a URDF fixed to 'world' or an MJCF file, in the "
-        "package's models/ folder or an absolute path ('': the bare plane)", read_only=True),
+        "Static obstacles loaded at start-up, in place of the world's own unless at the default: "
+        "a URDF fixed to 'world' or an MJCF file, in the package's models/ folder or an "
+        "absolute path ('': the bare plane)", read_only=True),
     ParameterSpec(
         'gui', False, "MuJoCo's interactive viewer (needs a display)", read_only=True),
     ParameterSpec(
@@ -294,6 +301,7 @@ class WorldParameters(Mapping):
         self._node = node
         self._specs = {spec.name: spec for spec in specs}
         self._listeners = []
+        self._checks = []
         values = {}
         # rclpy has no public accessor for the values given at start-up (-p, params files),
         # and declare_parameter() would refuse an integer for a DOUBLE parameter: read them
@@ -358,6 +366,10 @@ class WorldParameters(Mapping):
             raise KeyError(f'no world parameter named {", ".join(sorted(unknown))}')
         self._listeners.append((names, callback))
 
+    def refuse_when(self, check):
+        """Refuse a set when check({name: value after it}) returns a reason (else None)."""
+        self._checks.append(check)
+
     def unwatched(self):
         """Return the writable parameters no on_change() callback follows, in order."""
         if any(names is None for names, _ in self._listeners):
@@ -391,6 +403,10 @@ class WorldParameters(Mapping):
             pending[parameter.name] = parameter.value
         if set(self._specs) >= {'models', 'camera_position'}:
             problem = combination_problem(pending)
+            if problem is not None:
+                return SetParametersResult(successful=False, reason=problem)
+        for check in self._checks:
+            problem = check(pending)
             if problem is not None:
                 return SetParametersResult(successful=False, reason=problem)
         return SetParametersResult(successful=True)

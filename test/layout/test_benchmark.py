@@ -28,7 +28,7 @@ EXPECTED_ROWS = {
     'turning': len(QUICK.durations) * len(QUICK.velocities),
     'targets': (1 + 2 * len(QUICK.growth_counts) + 6 * len(QUICK.cost_counts) + 1
                 + 2 * len(QUICK.robot_counts)
-                + (report.CPU_TARGET_ROBOTS in QUICK.robot_counts) + 1 + 1 + 4 + 3),
+                + (report.CPU_TARGET_ROBOTS in QUICK.robot_counts) + 1 + 1 + 4 + 2 + 3),
     'core': 2,
     # cold spawn, warm spawn and delete of two robots per world size, and the box sequence
     'spawn_cost': 6 * len(QUICK.cost_counts) + 1,
@@ -38,6 +38,8 @@ EXPECTED_ROWS = {
     # SpawnEntities against MuJoCo's batch and against single spawns, StepSimulation, states
     # from a C client, and (no limit) from rclpy's client
     'standard_interfaces': 5,
+    # LoadWorld of the parking world and of the yard, each against the core's build of it
+    'world_loading': 2,
     # the web page: no browser against web:=false, free-running and in real time; one browser
     'web': 3,
 }

@@ -115,18 +115,13 @@ class Goal:
 
 # --- features ---------------------------------------------------------------------------------
 
-def test_every_feature_but_worlds_named_poses_and_spawnables_is_claimed(fast_world):
+def test_every_feature_but_spawnables_is_claimed(fast_world):
     features = fast_world.call(GetSimulatorFeatures, '/get_simulator_features',
                                GetSimulatorFeatures.Request()).features
     every = {value for name, value in vars(SimulatorFeatures).items()
              if name.isupper() and isinstance(value, int)}
     assert len(every) == 32
-    # Worlds, named poses and spawnables come with the next issue.
-    later = {SimulatorFeatures.NAMED_POSES, SimulatorFeatures.POSE_BOUNDS,
-             SimulatorFeatures.SPAWNABLES, SimulatorFeatures.WORLD_LOADING,
-             SimulatorFeatures.WORLD_RESOURCE_STRING, SimulatorFeatures.WORLD_TAGS,
-             SimulatorFeatures.WORLD_UNLOADING, SimulatorFeatures.WORLD_INFO_GETTING,
-             SimulatorFeatures.AVAILABLE_WORLDS}
+    later = {SimulatorFeatures.SPAWNABLES}
     assert list(features.features) == sorted(every - later)
     assert list(features.spawn_formats) == ['urdf']
     assert 'MuJoCo' in features.custom_info
@@ -177,7 +172,6 @@ def test_every_transition_between_the_states_and_its_refusals(fast_world):
 
 
 @pytest.mark.parametrize('target, code, named', [
-    (SimulationState.STATE_NO_WORLD, Result.RESULT_FEATURE_UNSUPPORTED, 'NO_WORLD'),
     (SimulationState.STATE_LOADING_WORLD, INCORRECT, 'LOADING_WORLD'),
     (6, INCORRECT, 'state 6'), (7, INCORRECT, 'state 7'), (255, INCORRECT, 'state 255')])
 def test_states_not_served_and_no_states_are_refused_and_change_nothing(

@@ -40,6 +40,7 @@ INTENDED = {
     'odom_publish_rate': (T.PARAMETER_DOUBLE, (0.0, INF), False),
     'joint_state_publish_rate': (T.PARAMETER_DOUBLE, (0.0, INF), False),
     'cmd_vel_timeout': (T.PARAMETER_DOUBLE, (0.0, INF), False),
+    'world': (T.PARAMETER_STRING, None, True),
     'models': (T.PARAMETER_STRING_ARRAY, None, True),
     'model_names': (T.PARAMETER_STRING_ARRAY, None, True),
     'model_namespaces': (T.PARAMETER_STRING_ARRAY, None, True),
@@ -68,7 +69,7 @@ WRONG_TYPE = {
     'model_poses': '[a, b, c, d]', 'gui': 'maybe', 'camera_enabled': '0.5',
     'camera_rate': '[10]', 'camera_width': '480.0', 'camera_height': 'tall',
     'camera_position': '1.0', 'camera_look_at': '[a, b, c]', 'camera_fovy': 'wide',
-    'snapshot_directory': '42', 'scenery': '[yard.urdf]',
+    'snapshot_directory': '42', 'scenery': '[yard.urdf]', 'world': '[yard]',
     'web': 'maybe', 'web_port': 'http', 'web_host': '127',
 }
 

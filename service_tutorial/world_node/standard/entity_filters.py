@@ -30,7 +30,7 @@ class EntityFilter:
         self._world = world
         self._pattern = _pattern(filters.filter)
         self._categories = {category.category for category in filters.categories}
-        self._tags = _tags(filters.tags)
+        self._tags = tags_test(filters.tags)
         self._overlaps = _bounds_test(filters.bounds)
 
     def matches(self, model):
@@ -58,7 +58,8 @@ def _pattern(text):
                       f'POSIX extended regular expression this world runs: {error}') from None
 
 
-def _tags(tags_filter):
+def tags_test(tags_filter):
+    """Return a test of a set of tags against a TagsFilter, None for no tags; or refuse it."""
     wanted = set(tags_filter.tags)
     if len(tags_filter.tags) > MAX_FILTER_TAGS:
         raise Refusal(Result.RESULT_OPERATION_FAILED, f'tags filter has '

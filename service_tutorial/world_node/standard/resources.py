@@ -2,9 +2,7 @@
 Where a spawn request's robot comes from: a package:// or file:// uri, or the URDF text itself.
 
 A uri is read only from below an installed ament package's share folder, the same roots a
-robot's meshes may come from: package://<package>/<path> by the package's share, file://<path>
-when the path lies in the share of the package it names (.../share/<package>/...). Paths with
-'..', links that lead out of the share, other schemes and other files are refused unopened. An
+robot's meshes may come from (package_files.py); other files are refused unopened. An
 installed .xacro file is expanded with xacro, as a launch file would; a resource_string is
 never expanded (a xacro there is refused by the URDF loader).
 """
@@ -14,8 +12,8 @@ import os
 
 from service_tutorial.robot_files import expand_xacro, is_xacro, RobotFileError
 from service_tutorial.sim.description import UrdfError
+from service_tutorial.sim.package_files import confined_path, PackageFileError
 from service_tutorial.sim.urdf.hardened_xml import MAX_MODEL_XML_BYTES, parse_xml
-from service_tutorial.sim.urdf.meshes import share_holding
 from service_tutorial.sim.validation import quoted
 from service_tutorial.world_node.standard.results import Refusal
 from simulation_interfaces.msg import SpawnResult
@@ -25,7 +23,6 @@ ROBOT_EXTENSIONS = ('.urdf', '.xacro')
 OTHER_FORMATS = {'.sdf': 'SDF', '.world': 'SDF', '.xml': 'MJCF', '.mjcf': 'MJCF',
                  '.usd': 'USD', '.usda': 'USD', '.usdc': 'USD', '.usdz': 'USD'}
 OTHER_ROOTS = {'sdf': 'SDF', 'mujoco': 'MJCF'}
-MAX_URI_LENGTH = 4096
 XACRO_TAG = '{http://www.ros.org/wiki/xacro}'
 
 
@@ -55,33 +52,10 @@ def read_resource(uri, resource_string, package_share):
 def resource_path(uri, package_share):
     """Return the real path of the robot file a uri names, or refuse it with NO_RESOURCE."""
     shown = quoted(uri)
-    if len(uri) > MAX_URI_LENGTH:
-        raise Refusal(SpawnResult.NO_RESOURCE, f'uri {shown} is longer than {MAX_URI_LENGTH} '
-                      'characters')
-    scheme, separator, rest = uri.partition('://')
-    if not separator or scheme not in ('package', 'file'):
-        raise Refusal(SpawnResult.NO_RESOURCE, f'uri {shown} is neither package://<package>/'
-                      '<path> nor file://<absolute path>')
-    if '..' in rest.split('/') or '\0' in rest:
-        raise Refusal(SpawnResult.NO_RESOURCE, f"uri {shown} must not contain '..'")
-    if scheme == 'package':
-        package, _, relative = rest.partition('/')
-        share = _share(package, package_share, shown)
-        candidate = os.path.join(share, relative)
-    else:
-        if not rest.startswith('/'):
-            raise Refusal(SpawnResult.NO_RESOURCE, f'uri {shown} is not an absolute path')
-        candidate = os.path.normpath(rest)
-        share = share_holding(candidate, package_share)
-        if share is None:
-            raise Refusal(SpawnResult.NO_RESOURCE, f'uri {shown} lies outside the share '
-                          'folders of the installed packages')
-    path = os.path.realpath(candidate)
-    if not path.startswith(share.rstrip(os.sep) + os.sep):
-        raise Refusal(SpawnResult.NO_RESOURCE, f'uri {shown} leads outside the share folder '
-                      'of its package')
-    if not os.path.isfile(path):
-        raise Refusal(SpawnResult.NO_RESOURCE, f'uri {shown} names no file')
+    try:
+        path = confined_path(uri, package_share)
+    except PackageFileError as error:
+        raise Refusal(SpawnResult.NO_RESOURCE, str(error)) from None
     extension = os.path.splitext(path)[1].lower()
     if extension in OTHER_FORMATS:
         raise Refusal(SpawnResult.UNSUPPORTED_FORMAT, f'uri {shown} is '
@@ -90,21 +64,6 @@ def resource_path(uri, package_share):
         raise Refusal(SpawnResult.UNSUPPORTED_FORMAT, f'uri {shown} is not a .urdf or '
                       '.xacro file; this world spawns urdf')
     return path
-
-
-def _share(package, package_share, shown):
-    """Return the real share folder of a package, or refuse the uri that names it."""
-    if not package or not all(character.isalnum() or character == '_'
-                              for character in package):
-        raise Refusal(SpawnResult.NO_RESOURCE, f'uri {shown} names no valid package')
-    try:
-        share = package_share(package)
-    except Exception:  # ament's PackageNotFoundError, or a resolver's own error
-        share = None
-    if not share or not os.path.isdir(share):
-        raise Refusal(SpawnResult.NO_RESOURCE, f'uri {shown}: package {quoted(package)} is '
-                      'not installed')
-    return os.path.realpath(share)
 
 
 def _read_file(uri, path):

@@ -10,10 +10,11 @@ round. Where the standard leaves a choice:
 - STOPPED to PAUSED is allowed (the state's own comment allows it): nothing moves, and the
   state says PAUSED. Pausing through the lesson or the parameter leaves a STOPPED world
   STOPPED, since it is paused already.
-- NO_WORLD and LOADING_WORLD come with worlds (issue 25): NO_WORLD is refused as a feature not
-  served (unloading the world), LOADING_WORLD as an incorrect transition (the simulator is in
-  it while it loads a world; nobody asks for it). A value that is no state is an incorrect
-  transition too. Once QUITTING, no state can follow.
+- NO_WORLD is the state after UnloadWorld (or with the world parameter ''); asking for it
+  unloads the world as UnloadWorld does. From it only a LoadWorld leads on: playing, pausing and
+  stopping are incorrect transitions. LOADING_WORLD is never asked for: the world is in it only
+  while a LoadWorld runs, and answers no other call meanwhile (an incorrect transition). A value
+  that is no state is an incorrect transition too. Once QUITTING, no state can follow.
 - A reset changes no state: a playing world plays on from the reset.
 - Spawned entities are the models that were not there when the world started: a start-up model
   deleted and spawned again counts as spawned, as does one spawned under a start-up name.
@@ -72,6 +73,8 @@ class SimulationServices:
         """Return the simulation's state, a SimulationState constant."""
         if self.node.quitting.done():
             return SimulationState.STATE_QUITTING
+        if self.node.world_loader.current is None:
+            return SimulationState.STATE_NO_WORLD
         if not self.world.paused:
             return SimulationState.STATE_PLAYING
         return SimulationState.STATE_STOPPED if self.stopped else SimulationState.STATE_PAUSED
@@ -107,13 +110,13 @@ class SimulationServices:
         if current == SimulationState.STATE_QUITTING:
             raise Refusal(SetSimulationState.Response.INCORRECT_TRANSITION,
                           f'{move}: the simulation is quitting')
-        if target == SimulationState.STATE_NO_WORLD:
-            raise Refusal(Result.RESULT_FEATURE_UNSUPPORTED,
-                          f'{move}: unloading the world is not served')
         if target == SimulationState.STATE_LOADING_WORLD:
             raise Refusal(SetSimulationState.Response.INCORRECT_TRANSITION,
-                          f'{move}: the simulation loads a world when LoadWorld asks, '
-                          'which is not served')
+                          f'{move}: the simulation loads a world when LoadWorld asks')
+        if current == SimulationState.STATE_NO_WORLD and \
+                target != SimulationState.STATE_QUITTING:
+            raise Refusal(SetSimulationState.Response.INCORRECT_TRANSITION,
+                          f'{move}: no world is loaded; load one with LoadWorld first')
         try:
             self._enter(target)
         except Exception as error:
@@ -127,6 +130,11 @@ class SimulationServices:
             self._set_paused(False)  # ends any stepping on request (MujocoWorld.paused_changed)
             return
         self.node.requested_steps.stop(STATE_NAMES[target].lower())
+        if target == SimulationState.STATE_NO_WORLD:
+            self.node.world_loader.unload()
+            self.stopped = False
+            self.node.after_reset()
+            return
         self._set_paused(True)
         self.stopped = target == SimulationState.STATE_STOPPED
         if target == SimulationState.STATE_STOPPED:
@@ -154,7 +162,7 @@ class SimulationServices:
         node, world = self.node, self.world
         if scope & SCOPE_SPAWNED:
             for name, model in list(world.models.items()):
-                if model not in node.start_up_models:
+                if model not in node.world_loader.start_up_models:
                     node.delete_model(name)
         if scope & SCOPE_STATE:
             if scope & SCOPE_TIME:

@@ -1,0 +1,112 @@
+"""
+Loading worlds through the standard: the parking world and the yard back, a robot at a pose.
+
+Each round loads the parking world (LoadWorld: its MJCF wall and crate, tinybot at its start)
+and spawns R2-D2 at its parking spot, then loads the yard back and spawns R2-D2 at the lesson's
+spawn point, both poses as GetNamedPoses gives them. Taken in turns with each load: what the
+ROS-free core takes to build the same world (a World with that scenery and tinybot spawned in
+it), the scenery's own compile time (read, checked and compiled into a bare scene), and a
+trivial Trigger on the world's executor.
+"""
+
+import os
+import time
+
+from harness import BenchmarkError, prompt_thread_switches, quiet_console
+from report import median_ms, Table
+from standard_interfaces import StandardWorld, TRIGGERS_ALLOWED
+
+# A load reads the world, tries its models in a trial world, then builds it: at most this many
+# times the core's own build of the same world, plus the Trigger round trips.
+LOAD_LIMIT = 3.0
+WORLDS = {'parking': 'parking_spot', 'yard': 'r2d2_spawn'}  # world -> where R2-D2 goes
+SCENERY = {'parking': 'parking.xml', 'yard': 'yard.urdf'}
+
+
+def model_file(name):
+    """Return the path of a file this package installs in models/."""
+    from ament_index_python.packages import get_package_share_directory
+    return os.path.join(get_package_share_directory('service_tutorial'), 'models', name)
+
+
+def core_world(scenery_path, tinybot):
+    """Return the wall time the core takes to build a World with a scenery and tinybot."""
+    from service_tutorial.sim.world import World
+    start = time.perf_counter()
+    world = World(scenery=scenery_path)
+    world.spawn_urdf('tinybot', tinybot)
+    return time.perf_counter() - start
+
+
+def scenery_compile(scenery_path):
+    """Return the wall time of reading, checking and compiling a scenery into a bare scene."""
+    from service_tutorial.sim.scene import Scene
+    from service_tutorial.sim.scenery import Scenery
+    start = time.perf_counter()
+    Scene(0.002, (0.0, 0.0, -9.81), Scenery(scenery_path)).spec().compile()
+    return time.perf_counter() - start
+
+
+def load_rounds(world, rounds):
+    """Load the parking world and the yard in turns, R2-D2 at a named pose in each."""
+    from geometry_msgs.msg import PoseStamped
+    from simulation_interfaces.msg import TagsFilter
+    from simulation_interfaces.srv import GetNamedPoses, LoadWorld, SpawnEntity
+    tinybot = open(model_file('tinybot.urdf')).read()
+    samples = {f'{name} {kind}': [] for name in WORLDS
+               for kind in ('load', 'core', 'scenery', 'spawn', 'trigger')}
+    for index in range(rounds + 1):  # the first warms up
+        for name, pose_name in WORLDS.items():
+            path = model_file(SCENERY[name])
+            taken = {'core': core_world(path, tinybot), 'scenery': scenery_compile(path),
+                     'trigger': world.trigger()}
+            taken['load'] = world.timed(LoadWorld, '/load_world', LoadWorld.Request(
+                uri=f'package://service_tutorial/worlds/{name}.world.xml'))
+            poses = world.call(GetNamedPoses, '/get_named_poses', GetNamedPoses.Request(
+                tags=TagsFilter())).poses
+            pose = next((p for p in poses if p.name == pose_name), None)
+            if pose is None:
+                raise BenchmarkError(f'world {name} names no pose {pose_name}')
+            initial = PoseStamped()
+            initial.pose = pose.pose
+            taken['spawn'] = world.timed(SpawnEntity, '/spawn_entity', SpawnEntity.Request(
+                name='r2d2', uri='package://service_tutorial/models/r2d2.urdf',
+                initial_pose=initial))
+            if index > 0:
+                for kind, value in taken.items():
+                    samples[f'{name} {kind}'].append(value)
+    return samples
+
+
+def worlds_table(observer, config):
+    """Return the table of LoadWorld of the parking world and the yard against the core."""
+    with quiet_console(config.log_path):
+        world = StandardWorld(observer, {})
+        try:
+            with prompt_thread_switches():
+                samples = load_rounds(world, config.standard_rounds)
+        finally:
+            world.close()
+    table = Table('world_loading', 'LoadWorld, a robot at a named pose each time (ms)', [
+        ('figure', ''), ('rounds', 'd'), ('LoadWorld p50', '.2f'), ('core world p50', '.2f'),
+        ('scenery compile p50', '.2f'), ('Trigger p50', '.3f'), ('limit', '.2f'),
+        ('within', '')])
+    spawns = []
+    for name, pose_name in WORLDS.items():
+        load, core = median_ms(samples[f'{name} load']), median_ms(samples[f'{name} core'])
+        trigger = median_ms(samples[f'{name} trigger'])
+        limit = LOAD_LIMIT * core + TRIGGERS_ALLOWED * trigger
+        table.rows.append([
+            f'LoadWorld {name} <= {LOAD_LIMIT:g} x core world + {TRIGGERS_ALLOWED:g} x '
+            'Trigger', len(samples[f'{name} load']), load, core,
+            median_ms(samples[f'{name} scenery']), trigger, limit, load <= limit])
+        spawns.append(f'{median_ms(samples[f"{name} spawn"]):.1f} ms at {pose_name}')
+    table.note = (
+        'Each round loads the parking world, then the yard, by their package:// uris, from '
+        'request to answer; each load removes every entity with its topics, reads the world '
+        'file, its scenery and tinybot, tries them in a trial world, builds the world and '
+        "spawns tinybot. core world: the ROS-free core's World built with the same scenery and "
+        'tinybot spawned, taken in turns with the load. scenery compile: the scenery alone, '
+        'read, checked and compiled into a bare scene. After each load R2-D2 is spawned at the '
+        f'named pose GetNamedPoses gives ({", ".join(spawns)}, SpawnEntity p50).')
+    return table

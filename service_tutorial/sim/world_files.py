@@ -1,0 +1,287 @@
+"""
+World files: a world's scenery, its start-up models and its named poses, in one small file.
+
+    <world name="parking">
+      <description>A wall with a crate before it, to park tinybot in front of.</description>
+      <tag>lesson</tag>
+      <scenery uri="package://service_tutorial/models/parking.xml"/>
+      <named_pose name="parking_spot">
+        <description>In front of the crate, facing it</description>
+        <tag>parking</tag>
+        <origin xyz="2.2 0 0" rpy="0 0 0"/>
+        <bounds type="box" min="1.9 -0.3 0" max="2.5 0.3 0.4"/>
+      </named_pose>
+      <model name="tinybot" uri="package://service_tutorial/models/tinybot.urdf"
+             pose="tinybot_start"/>
+    </world>
+
+A file names its scenery and models by package:// or file:// uri inside an installed package's
+share (package_files.py), or by a name in the world file's own folder; a world given as text
+only by uri. No scenery is the bare plane. A model stands at a named pose of the world or at an
+<origin> of its own (the origin of the world if neither). Poses are in the world frame, rpy as
+in URDF; bounds are a box (two opposite corners) or a sphere (centre and radius) in the world
+frame, where something may stand at the pose. Elements the world does not know are listed in
+WorldFile.unsupported, for the loader to refuse or to ignore.
+"""
+
+from dataclasses import dataclass, field
+import os
+
+import mujoco
+import numpy as np
+from service_tutorial.sim.description import parse_numbers, UrdfError
+from service_tutorial.sim.package_files import confined_path, PackageFileError, within
+from service_tutorial.sim.urdf.hardened_xml import parse_xml
+from service_tutorial.sim.validation import check_model_name, quoted, WorldError
+
+# A world file is small: a few poses and models, never megabytes.
+MAX_WORLD_FILE_BYTES = 1 << 20
+MAX_ENTRIES = 1000  # named poses, models or tags of one world
+MAX_TEXT_LENGTH = 10000  # a description
+MAX_NAME_LENGTH = 256  # a world's, a pose's or a tag's
+MAX_COORDINATE = 1e6  # metres
+WORLD_FILE_SUFFIX = '.world.xml'
+
+# What went wrong, as LoadWorld's codes tell it apart.
+NO_RESOURCE = 'no resource'
+PARSE_ERROR = 'parse error'
+UNSUPPORTED_FORMAT = 'unsupported format'
+
+
+class WorldFileError(WorldError):
+    """A world file the world cannot load; kind: NO_RESOURCE, PARSE_ERROR, ..."""
+
+    def __init__(self, kind, message):
+        super().__init__(message)
+        self.kind = kind
+
+
+@dataclass(frozen=True)
+class NamedPose:
+    """A pose the world names: where to spawn, park or go."""
+
+    name: str
+    description: str
+    tags: tuple
+    position: tuple
+    orientation: tuple  # (w, x, y, z)
+    bounds_type: str  # 'box', 'sphere' or '' for none
+    bounds_points: tuple  # box: two corners; sphere: centre, (radius, 0, 0)
+
+
+@dataclass(frozen=True)
+class StartModel:
+    """A model the world spawns when it loads: its file, name, namespace and pose."""
+
+    name: str  # '' for the name inside the file
+    path: str
+    namespace: str
+    position: tuple
+    orientation: tuple  # (w, x, y, z)
+
+
+@dataclass(frozen=True)
+class WorldFile:
+    """What one world file says."""
+
+    name: str
+    description: str
+    tags: tuple
+    scenery: str  # the scenery file's real path, '' for the bare plane
+    models: tuple
+    named_poses: dict = field(default_factory=dict)  # name -> NamedPose, in file order
+    unsupported: tuple = ()  # elements the world does not know, as '<tag>'
+
+
+def read_world_file(path, package_share, *, shown=None):
+    """Return the WorldFile of a file (checked against the roots by its caller)."""
+    shown = quoted(shown or path)
+    try:
+        with open(path, 'rb') as world_file:
+            data = world_file.read(MAX_WORLD_FILE_BYTES + 1)
+    except OSError as error:
+        raise WorldFileError(NO_RESOURCE, f'world file {shown} cannot be read: '
+                             f'{error.strerror}') from None
+    name = os.path.basename(path)
+    default_name = name[:-len(WORLD_FILE_SUFFIX)] if name.endswith(WORLD_FILE_SUFFIX) else \
+        os.path.splitext(name)[0]
+    return parse_world(data, f'world file {shown}', os.path.dirname(path), package_share,
+                       default_name=default_name)
+
+
+def parse_world(data, what, base_dir, package_share, *, default_name=''):
+    """Return the WorldFile of a world's XML (bytes); base_dir None: it names files by uri."""
+    if isinstance(data, str):
+        data = data.encode('utf-8')
+    if len(data) > MAX_WORLD_FILE_BYTES:
+        raise WorldFileError(PARSE_ERROR, f'{what} is larger than {MAX_WORLD_FILE_BYTES} bytes')
+    try:
+        root = parse_xml(data, what)
+    except UrdfError as error:
+        raise WorldFileError(PARSE_ERROR, str(error)) from None
+    reader = _Reader(what, base_dir, package_share)
+    try:
+        return reader.world(root, default_name)
+    except UrdfError as error:  # parse_numbers' refusals
+        raise WorldFileError(PARSE_ERROR, f'{what}: {error}') from None
+
+
+class _Reader:
+    """Reads the elements of one world file, resolving its files inside the roots."""
+
+    def __init__(self, what, base_dir, package_share):
+        self.what = what
+        self.base_dir = base_dir
+        self.package_share = package_share
+        self.unsupported = []
+
+    def fail(self, message, kind=PARSE_ERROR):
+        raise WorldFileError(kind, f'{self.what}: {message}')
+
+    def world(self, root, default_name):
+        if root.tag != 'world':
+            self.fail(f'the root element is <{str(root.tag)[:40]}>, not <world>',
+                      UNSUPPORTED_FORMAT)
+        name = self.name(root.get('name') or default_name, 'world name')
+        description, tags, scenery = '', [], ''
+        models, poses = [], {}
+        children = [child for child in root if isinstance(child.tag, str)]
+        if len(children) > 3 * MAX_ENTRIES:
+            self.fail(f'has {len(children)} elements, more than {3 * MAX_ENTRIES}')
+        for child in children:
+            if child.tag == 'description':
+                description = self.text(child)
+            elif child.tag == 'tag':
+                tags.append(self.name(child.text or '', 'tag'))
+            elif child.tag == 'scenery':
+                if scenery:
+                    self.fail('has more than one <scenery>')
+                scenery = self.file(child.get('uri'), '<scenery>')
+            elif child.tag == 'named_pose':
+                pose = self.named_pose(child)
+                if pose.name in poses:
+                    self.fail(f'names the pose {quoted(pose.name)} twice')
+                poses[pose.name] = pose
+            elif child.tag == 'model':
+                models.append(child)
+            else:
+                self.unsupported.append(f'<{child.tag[:40]}>')
+        if max(len(tags), len(poses), len(models)) > MAX_ENTRIES:
+            self.fail(f'has more than {MAX_ENTRIES} tags, named poses or models')
+        return WorldFile(
+            name=name, description=description, tags=tuple(dict.fromkeys(tags)),
+            scenery=scenery, models=tuple(self.model(element, poses) for element in models),
+            named_poses=poses, unsupported=tuple(self.unsupported))
+
+    def name(self, text, what):
+        text = text.strip()
+        if not text or len(text) > MAX_NAME_LENGTH or not text.isprintable():
+            self.fail(f'{what} {quoted(text)} must be 1 to {MAX_NAME_LENGTH} printable '
+                      'characters')
+        return text
+
+    def text(self, element):
+        text = ' '.join((element.text or '').split())
+        if len(text) > MAX_TEXT_LENGTH:
+            self.fail(f'<{element.tag}> is longer than {MAX_TEXT_LENGTH} characters')
+        return text
+
+    def file(self, uri, what):
+        """Return the real path of a file the world names, inside the roots."""
+        if not uri:
+            self.fail(f'{what} has no uri')
+        try:
+            if '://' in uri or self.base_dir is None:
+                return confined_path(uri, self.package_share)
+        except PackageFileError as error:
+            self.fail(f'{what}: {error}', NO_RESOURCE)
+        shown = quoted(uri)
+        if os.path.isabs(uri) or '..' in uri.split('/') or '\0' in uri:
+            self.fail(f"{what} names {shown}: a file of the world's own folder, or a "
+                      'package:// uri', NO_RESOURCE)
+        path = os.path.realpath(os.path.join(self.base_dir, uri))
+        if not within(path, self.base_dir) or not os.path.isfile(path):
+            self.fail(f"{what} names {shown}, which is no file in the world's folder",
+                      NO_RESOURCE)
+        return path
+
+    def named_pose(self, element):
+        name = self.name(element.get('name') or '', 'named pose name')
+        description, tags = '', []
+        position, orientation = (0.0, 0.0, 0.0), (1.0, 0.0, 0.0, 0.0)
+        bounds_type, points = '', ()
+        for child in element:
+            if not isinstance(child.tag, str):
+                continue
+            if child.tag == 'description':
+                description = self.text(child)
+            elif child.tag == 'tag':
+                tags.append(self.name(child.text or '', 'tag'))
+            elif child.tag == 'origin':
+                position, orientation = self.origin(child)
+            elif child.tag == 'bounds':
+                bounds_type, points = self.bounds(child, name)
+            else:
+                self.unsupported.append(f'<{child.tag[:40]}> in <named_pose>')
+        if len(tags) > MAX_ENTRIES:
+            self.fail(f'named pose {quoted(name)} has more than {MAX_ENTRIES} tags')
+        return NamedPose(name, description, tuple(dict.fromkeys(tags)), position, orientation,
+                         bounds_type, points)
+
+    def origin(self, element):
+        xyz = self.numbers(element.get('xyz', '0 0 0'), 3, 'origin xyz')
+        rpy = self.numbers(element.get('rpy', '0 0 0'), 3, 'origin rpy')
+        quaternion = np.zeros(4)
+        mujoco.mju_euler2Quat(quaternion, np.array(rpy), 'XYZ')  # URDF's fixed axes
+        return xyz, tuple(float(value) for value in quaternion)
+
+    def bounds(self, element, pose):
+        kind = element.get('type', '')
+        if kind == 'box':
+            lower = self.numbers(element.get('min', ''), 3, f'bounds min of {quoted(pose)}')
+            upper = self.numbers(element.get('max', ''), 3, f'bounds max of {quoted(pose)}')
+            if not all(low < high for low, high in zip(lower, upper)):
+                self.fail(f'bounds of {quoted(pose)}: min must be below max on every axis')
+            return kind, (lower, upper)
+        if kind == 'sphere':
+            centre = self.numbers(element.get('center', ''), 3,
+                                  f'bounds center of {quoted(pose)}')
+            radius, = self.numbers(element.get('radius', ''), 1,
+                                   f'bounds radius of {quoted(pose)}')
+            if not radius > 0.0:
+                self.fail(f'bounds radius of {quoted(pose)} must be positive: {radius}')
+            return kind, (centre, (radius, 0.0, 0.0))
+        self.fail(f'bounds of {quoted(pose)} have type {quoted(kind)}: box or sphere')
+
+    def numbers(self, text, count, what):
+        values = parse_numbers(text[:1000], what)
+        if len(values) != count:
+            self.fail(f'{what} must be {count} numbers: {quoted(text)}')
+        if any(abs(value) > MAX_COORDINATE for value in values):
+            self.fail(f'{what} is beyond {MAX_COORDINATE:g} m: {quoted(text)}')
+        return tuple(values)
+
+    def model(self, element, poses):
+        name = element.get('name', '')
+        if name:
+            try:
+                check_model_name(name)
+            except WorldError as error:
+                self.fail(f'<model>: {error}')
+        path = self.file(element.get('uri'), f'<model> {quoted(name)}')
+        pose_name = element.get('pose')
+        origin = element.find('origin')
+        if pose_name is not None and origin is not None:
+            self.fail(f'<model> {quoted(name)} has both a pose and an <origin>')
+        if pose_name is not None:
+            if pose_name not in poses:
+                self.fail(f'<model> {quoted(name)} stands at pose {quoted(pose_name)}, which '
+                          'the world does not name')
+            pose = poses[pose_name]
+            position, orientation = pose.position, pose.orientation
+        elif origin is not None:
+            position, orientation = self.origin(origin)
+        else:
+            position, orientation = (0.0, 0.0, 0.0), (1.0, 0.0, 0.0, 0.0)
+        return StartModel(name=name, path=path, namespace=element.get('namespace', ''),
+                          position=position, orientation=orientation)

@@ -1,0 +1,274 @@
+"""
+Which world the node serves: its scenery, start-up models and named poses, and loading another.
+
+A world comes from a world file (sim/world_files.py): this package's worlds/ and every installed
+package's worlds/ hold them, found by name. Loading one is all or nothing: the new scenery, its
+models and their files are read and tried in a trial world first (World.trial), and only
+if all of them hold does the node remove every entity with its topics, load the scenery and
+spawn the world's models. A load that fails leaves the world the node had exactly as it was.
+Unloading leaves the no-world state: no entities, nothing steps or spawns until a load.
+"""
+
+from dataclasses import dataclass, replace
+import logging
+import os
+
+from ament_index_python.packages import get_package_share_directory
+from ament_index_python.packages import get_packages_with_prefixes
+from rclpy.parameter import Parameter
+from service_tutorial.robot_files import file_model_name, read_robot_file, RobotFileError
+from service_tutorial.sim import frames
+from service_tutorial.sim.core_logs import core_logger
+from service_tutorial.sim.package_files import confined_path, PackageFileError
+from service_tutorial.sim.scenery import Scenery
+from service_tutorial.sim.spawning import SpawnOrder
+from service_tutorial.sim.validation import quoted, WorldError
+from service_tutorial.sim.world_files import NO_RESOURCE, read_world_file, StartModel
+from service_tutorial.sim.world_files import WORLD_FILE_SUFFIX, WorldFileError
+from service_tutorial.world_node.parameters import ParameterError
+from service_tutorial.world_node.ros_names import normalise_namespace
+
+PACKAGE = 'service_tutorial'
+WORLD_LOG = 'service_tutorial.world'  # sim/world.py's log
+WORLDS_FOLDER = 'worlds'
+# The world parameters that, set to anything but their default, replace the world's own.
+SCENERY_PARAMETER = 'scenery'
+MODEL_PARAMETERS = ('models', 'model_names', 'model_namespaces', 'model_poses')
+# What else went wrong loading a world, beside world_files' kinds.
+MISSING_ASSETS = 'missing assets'
+UNSUPPORTED_ASSETS = 'unsupported assets'
+MODEL_REFUSED = 'model refused'
+
+
+def resolve_model_path(model):
+    """Find a model (URDF or xacro) or scenery file: an absolute path, or one in models/."""
+    if os.path.isabs(model):
+        return model
+    return os.path.join(get_package_share_directory(PACKAGE), 'models', model)
+
+
+def parameter_models(parameters):
+    """Return (file, name, namespace, position, orientation) of each model the parameters name."""
+    files = list(parameters['models'])
+    names = list(parameters['model_names']) or [file_model_name(f) for f in files]
+    namespaces = list(parameters['model_namespaces']) or [''] * len(files)
+    poses = list(parameters['model_poses']) or [0.0] * 4 * len(files)
+    if not len(files) == len(names) == len(namespaces) == len(poses) // 4:
+        raise ValueError('models, model_names, model_namespaces and model_poses '
+                         '(4 numbers each) must describe the same number of models')
+    return [(resolve_model_path(model), name, namespace, poses[4 * index:4 * index + 3],
+             frames.yaw_quaternion(poses[4 * index + 3]))
+            for index, (model, name, namespace) in enumerate(zip(files, names, namespaces))]
+
+
+@dataclass(frozen=True)
+class LoadedWorld:
+    """The world a node serves: what its file says and where the file is ('' for a text)."""
+
+    world: object  # a WorldFile
+    uri: str
+    resource_string: str = ''
+    scenery_text: str = ''  # a scenery given as text, in place of the world's file
+
+
+@dataclass(frozen=True)
+class PreparedWorld:
+    """A world read and tried, ready to replace the current one without a failure."""
+
+    loaded: LoadedWorld
+    scenery: object  # a Scenery, or None for the bare plane
+    orders: tuple  # SpawnOrders of its models
+    namespaces: tuple
+
+
+class WorldLoader:
+    """Loads worlds into a MujocoWorld node's World, keeping what the current one names."""
+
+    def __init__(self, node, package_share):
+        """Serve node's world; package_share finds a package's share folder."""
+        self.node = node
+        self.package_share = package_share
+        self.current = None  # the LoadedWorld, None in the no-world state
+        self.start_up_models = frozenset()  # the Models the current world spawned
+        node.parameters.refuse_when(self.refuse_playing)
+
+    def refuse_playing(self, values):
+        """Refuse paused:=false in the no-world state, whoever sets it (a parameter check)."""
+        if not values['paused'] and self.current is None:
+            return 'no world is loaded: load one (LoadWorld) before playing'
+        return None
+
+    @property
+    def named_poses(self):
+        """Return the current world's NamedPoses by name ({} with no world)."""
+        return {} if self.current is None else self.current.world.named_poses
+
+    def find(self, name):
+        """Return the path of a world file by name: this package's worlds/ first, then any."""
+        own = os.path.join(self.package_share(PACKAGE), WORLDS_FOLDER, name + WORLD_FILE_SUFFIX)
+        if '/' in name or name in ('.', '..'):
+            raise WorldFileError(NO_RESOURCE, f'{quoted(name)} is no world name: give a name, '
+                                 'a package:// uri or an absolute path')
+        if os.path.isfile(own):
+            return own
+        for package in sorted(get_packages_with_prefixes()):
+            try:
+                path = os.path.join(self.package_share(package), WORLDS_FOLDER,
+                                    name + WORLD_FILE_SUFFIX)
+            except Exception:  # noqa: B902 a package the index names but cannot place
+                continue
+            if os.path.isfile(path):
+                return path
+        raise WorldFileError(NO_RESOURCE, f'no world named {quoted(name)} in the worlds/ '
+                             'folder of any installed package')
+
+    def start_up_world(self, parameters, defaults):
+        """
+        Return the PreparedWorld the node starts with: the `world` parameter's file.
+
+        '' is the no-world state (None). scenery and the models parameters, set to other than
+        their defaults, replace what the file says. A world that cannot be read is a bad
+        parameter: ParameterError.
+        """
+        try:
+            loaded = self._start_up_file(parameters, defaults)
+            return None if loaded is None else self.prepare(loaded, trial=False)
+        except WorldError as error:
+            raise ParameterError(f'parameter world:={quoted(parameters["world"])}: '
+                                 f'{error}') from None
+
+    def begin(self, start_up):
+        """Spawn the start-up world's models into the node's new World, or unload it (None)."""
+        if start_up is None:
+            self.unload()
+        else:
+            self.populate(start_up)
+
+    def _start_up_file(self, parameters, defaults):
+        choice = parameters['world']
+        if not choice:
+            return None
+        if '://' in choice:
+            path, uri = path_of_uri(choice, self.package_share), choice
+        elif os.path.isabs(choice):
+            path, uri = choice, 'file://' + choice
+        else:
+            path = self.find(choice)
+            uri = f'package://{os.path.basename(os.path.dirname(os.path.dirname(path)))}/' \
+                f'{WORLDS_FOLDER}/{os.path.basename(path)}'
+        world = read_world_file(path, self.package_share)
+        replaced = []
+        if parameters[SCENERY_PARAMETER] != defaults[SCENERY_PARAMETER]:
+            scenery = parameters[SCENERY_PARAMETER]
+            world = replace(world, scenery=resolve_model_path(scenery) if scenery else '')
+            replaced.append('scenery')
+        if any(parameters[name] != tuple(defaults[name]) for name in MODEL_PARAMETERS):
+            world = replace(world, models=tuple(
+                StartModel(name, path, namespace, tuple(position), tuple(orientation))
+                for path, name, namespace, position, orientation
+                in parameter_models(parameters)))
+            replaced.append('models')
+        if replaced:
+            world = replace(world, description=f'{world.description} ({" and ".join(replaced)}'
+                            ' from the parameters)')
+        return LoadedWorld(world, uri)
+
+    def prepare(self, loaded, *, trial=True):
+        """
+        Read a world's scenery and models; return a PreparedWorld or raise WorldError.
+
+        trial: spawn the models in a trial world first (the node's world must exist), so that
+        a world whose models cannot stand together is refused before anything changes.
+        """
+        world = loaded.world
+        scenery = None
+        if loaded.scenery_text:
+            scenery = Scenery.from_text(loaded.scenery_text, 'resource_string',
+                                        package_resolver=self.package_share)
+        elif world.scenery:
+            scenery = Scenery(world.scenery, package_resolver=self.package_share)
+        orders, namespaces = [], []
+        for model in world.models:
+            try:
+                robot = read_robot_file(model.path)
+                namespaces.append(normalise_namespace(model.namespace))
+            except RobotFileError as error:
+                raise WorldFileError(MISSING_ASSETS, str(error)) from None
+            orders.append(SpawnOrder(model.name or file_model_name(model.path), robot.urdf,
+                                     position=model.position, orientation=model.orientation,
+                                     base_dir=robot.base_dir))
+        tried = self._trial(scenery, orders) if trial else ()
+        refused = [(order.name, outcome) for order, outcome in zip(orders, tried)
+                   if isinstance(outcome, WorldError)]
+        if refused:
+            name, error = refused[0]
+            raise WorldFileError(MODEL_REFUSED, f'world {quoted(world.name)} cannot spawn its '
+                                 f'model {quoted(name)}: {error}')
+        return PreparedWorld(loaded, scenery, tuple(orders), tuple(namespaces))
+
+    def _trial(self, scenery, orders):
+        """Return what spawning orders into a new world with scenery gives, said quietly."""
+        from service_tutorial.sim.world import World
+        parameters = self.node.parameters
+        world_log = core_logger(WORLD_LOG)
+        level = world_log.level
+        world_log.setLevel(logging.WARNING)  # the trial's spawns are not the world's
+        try:
+            return World(timestep=parameters['timestep'],
+                         cmd_vel_timeout=parameters['cmd_vel_timeout'],
+                         package_resolver=self.package_share,
+                         scenery=scenery).spawn_urdf_batch(orders)
+        finally:
+            world_log.setLevel(level)
+
+    def load(self, prepared):
+        """Replace the world: every entity goes, the prepared scenery and models come."""
+        self._clear()
+        self.node.world.load(prepared.scenery)
+        self.node.viewer.reopen()
+        self.populate(prepared)
+        self._pause()
+
+    def populate(self, prepared):
+        """Spawn a prepared world's models into the loaded scenery; it is the current world."""
+        node = self.node
+        self.current = prepared.loaded
+        outcomes = node.spawn_models(list(prepared.orders), list(prepared.namespaces))
+        failed = [outcome for outcome in outcomes if isinstance(outcome, Exception)]
+        self.start_up_models = frozenset(node.world.models.values())
+        node.make_model_topics()
+        if failed:  # the trial spawned them all: this is a bug, not the request's fault
+            raise WorldError(f'world {quoted(prepared.loaded.world.name)} loaded, but '
+                             f'{len(failed)} of its models failed: {failed[0]}')
+
+    def unload(self):
+        """Enter the no-world state: every entity and the scenery go; nothing steps."""
+        self._clear()
+        self.node.world.load(None)
+        self.node.viewer.reopen()
+        self.current = None
+        self.start_up_models = frozenset()
+        self._pause()
+
+    def _pause(self):
+        """Have the paused parameter say what the world is: paused, after a load or unload."""
+        self.node.set_parameters([Parameter('paused', Parameter.Type.BOOL, True)])
+
+    def check_loaded(self, what):
+        """Refuse what (a spawn...) with WorldError in the no-world state."""
+        if self.current is None:
+            raise WorldError(f'no world is loaded: {what} waits for a world (LoadWorld)')
+
+    def _clear(self):
+        node = self.node
+        node.requested_steps.stop('the world is replaced')
+        for name in node.world.model_names():
+            node.delete_model(name)
+
+
+def path_of_uri(uri, package_share):
+    """Return the real path of a world file uri inside the roots, or raise WorldFileError."""
+    try:
+        return confined_path(uri, package_share)
+    except PackageFileError as error:
+        raise WorldFileError(NO_RESOURCE, str(error)) from None
