@@ -147,6 +147,7 @@ class MujocoWorld(Node):
         # before the simulation's imports (yourdfpy and trimesh take over a second).
         from service_tutorial.sim.world import World
         from service_tutorial.world_node.standard.entities import EntityServices
+        from service_tutorial.world_node.standard.spawnables import SpawnableServices
         scenery = parameters['scenery']
         self.world = World(timestep=parameters['timestep'],
                            cmd_vel_timeout=parameters['cmd_vel_timeout'],
@@ -183,7 +184,9 @@ class MujocoWorld(Node):
         # The ROS 2 standard simulation interfaces, relative to the node's namespace.
         simulation = SimulationServices(self)
         self.stepping_services = SteppingServices(self, simulation)
-        self.standard_groups = [simulation, self.stepping_services, EntityServices(self)]
+        self.standard_groups = [
+            simulation, self.stepping_services, EntityServices(self),
+            SpawnableServices(self, scenery=resolve_model_path(scenery) if scenery else None)]
         self.feature_service = FeatureService(self, self.standard_groups)
         # ~/camera/image_raw, ~/camera/camera_info (camera_enabled) and ~/save_snapshot.
         self.camera_stream = CameraStream(self, self.world, parameters)
