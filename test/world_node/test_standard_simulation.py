@@ -115,15 +115,15 @@ class Goal:
 
 # --- features ---------------------------------------------------------------------------------
 
-def test_every_feature_but_worlds_named_poses_and_spawnables_is_claimed(fast_world):
+def test_every_feature_but_worlds_and_named_poses_is_claimed(fast_world):
     features = fast_world.call(GetSimulatorFeatures, '/get_simulator_features',
                                GetSimulatorFeatures.Request()).features
     every = {value for name, value in vars(SimulatorFeatures).items()
              if name.isupper() and isinstance(value, int)}
     assert len(every) == 32
-    # Worlds, named poses and spawnables come with the next issue.
+    # Worlds and named poses come with the next issue.
     later = {SimulatorFeatures.NAMED_POSES, SimulatorFeatures.POSE_BOUNDS,
-             SimulatorFeatures.SPAWNABLES, SimulatorFeatures.WORLD_LOADING,
+             SimulatorFeatures.WORLD_LOADING,
              SimulatorFeatures.WORLD_RESOURCE_STRING, SimulatorFeatures.WORLD_TAGS,
              SimulatorFeatures.WORLD_UNLOADING, SimulatorFeatures.WORLD_INFO_GETTING,
              SimulatorFeatures.AVAILABLE_WORLDS}

@@ -263,3 +263,16 @@ def test_a_repeated_call_is_quick(ros):
         durations.append(time.monotonic() - start)
     print(f'\nGetSpawnables again: {durations} s')
     assert min(durations) < 0.5
+
+
+def test_files_left_for_a_next_call_are_counted_and_come_then(ros, monkeypatch):
+    from service_tutorial.world_node.standard import spawnables as spawnables_module
+    world = ros.start_world(paused=True)
+    monkeypatch.setattr(spawnables_module, 'READING_SECONDS', -1.0)
+    response = spawnables(world)
+    assert response.result.result == Result.RESULT_OK
+    assert TINYBOT_URI not in offered(response)
+    assert 'robot files are not read yet: reading new files takes at most -1 s a call; ask ' \
+        'again for them' in response.result.error_message
+    monkeypatch.setattr(spawnables_module, 'READING_SECONDS', 5.0)
+    assert TINYBOT_URI in offered(spawnables(world))

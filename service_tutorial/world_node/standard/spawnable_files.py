@@ -7,13 +7,18 @@ default arguments, or an MJCF .xml/.mjcf whose root is <mujoco>. The same roots 
 uri's hold (resources.py): a source is package://<package>/<folder> or file://<folder> in an
 installed share, with no '..'; links to folders are not followed, a file whose link leads out of
 its share is left out unread. Reading a file (expanding, building, compiling it alone) is kept
-under its real path, modification time and size, so a second call costs only the walk. No
-rclpy: the words for a robot's plugins come from the caller.
+under its uri, real path, modification time and size, so a second call costs only the walk;
+a call reads new files for READING_SECONDS at most and leaves the rest to the next, so a world
+with many packages is not held up for long. (A xacro file whose includes change while it does
+not is read again only once it changes too.) No rclpy: the words for a robot's plugins come
+from the caller.
 """
 
 import collections
 from dataclasses import dataclass
+import math
 import os
+import time
 
 from ament_index_python.packages import get_packages_with_prefixes
 import mujoco
@@ -39,6 +44,10 @@ CACHED_FILES = 2000
 MJCF_FILE_ATTRIBUTES = ('file', 'fileback', 'filedown', 'filefront', 'fileleft', 'fileright',
                         'fileup', 'meshdir', 'texturedir', 'assetdir')
 MAX_MJCF_INCLUDES = 20
+# Wall time one call spends reading files it has not read before; the rest wait for a next call.
+READING_SECONDS = 5.0
+# What read() returns for a file left for a next call.
+NOT_READ = 'not read'
 
 
 class SourceRefused(Exception):
@@ -201,18 +210,26 @@ class RobotFileReader:
         self._package_resolver = package_resolver
         self._plugin_words = plugin_words
         self._size = size
-        self._kept = collections.OrderedDict()  # (path, mtime, size) -> offer or LeftOut
+        # (uri, real path, mtime, size) -> RobotFileOffer, LeftOut or None
+        self._kept = collections.OrderedDict()
 
-    def read(self, uri, path):
-        """Return the RobotFileOffer of a file, its LeftOut, or None if it is no robot file."""
+    def read(self, uri, path, *, deadline=math.inf):
+        """
+        Return the RobotFileOffer of a file, its LeftOut, or None if it is no robot file.
+
+        A file not read before is read only until time.monotonic() passes deadline: after it,
+        NOT_READ.
+        """
         try:
             status = os.stat(path)
         except OSError as error:
             return LeftOut(uri, f'it cannot be read: {error.strerror}')
-        key = (path, status.st_mtime_ns, status.st_size)
+        key = (uri, path, status.st_mtime_ns, status.st_size)
         if key in self._kept:
             self._kept.move_to_end(key)
             return self._kept[key]
+        if time.monotonic() > deadline:
+            return NOT_READ
         answer = self._read_new(uri, path, status.st_size)
         self._kept[key] = answer
         while len(self._kept) > self._size:

@@ -18,6 +18,7 @@ answer is still RESULT_OK, as the standard has it ("not fatal").
 """
 
 import os
+import time
 
 from ament_index_python.packages import get_package_share_directory
 from geometry_msgs.msg import Vector3
@@ -27,7 +28,8 @@ from service_tutorial.world_node.faces import FACES
 from service_tutorial.world_node.standard import spawnable_files
 from service_tutorial.world_node.standard.results import answer
 from service_tutorial.world_node.standard.spawnable_files import FileWalk, LeftOut
-from service_tutorial.world_node.standard.spawnable_files import MAX_SOURCES
+from service_tutorial.world_node.standard.spawnable_files import MAX_SOURCES, NOT_READ
+from service_tutorial.world_node.standard.spawnable_files import READING_SECONDS
 from service_tutorial.world_node.standard.spawnable_files import RobotFileReader
 from service_tutorial.world_node.standard.spawnable_files import source_folder
 from service_tutorial.world_node.standard.spawnable_files import SourceRefused
@@ -82,11 +84,15 @@ class SpawnableServices:
         left_out = [LeftOut(uri, 'it is a link that leads outside the share folder of its '
                             'package') for uri in walk.links_out]
         response.spawnables = []
+        deadline = time.monotonic() + READING_SECONDS
+        not_read = 0
         for uri, path in walk.found.items():
             if path == self.scenery:
                 continue
-            offer = self.reader.read(uri, path)
-            if isinstance(offer, LeftOut):
+            offer = self.reader.read(uri, path, deadline=deadline)
+            if offer is NOT_READ:
+                not_read += 1
+            elif isinstance(offer, LeftOut):
                 left_out.append(offer)
             elif offer is not None:
                 response.spawnables.append(Spawnable(
@@ -97,6 +103,9 @@ class SpawnableServices:
             more = (f'; and {len(left_out) - NAMED_LEFT_OUT} more'
                     if len(left_out) > NAMED_LEFT_OUT else '')
             notes.append(f'{len(left_out)} robot files are left out: {named}{more}')
+        if not_read:
+            notes.append(f'{not_read} robot files are not read yet: reading new files takes '
+                         f'at most {READING_SECONDS:g} s a call; ask again for them')
         if walk.cut_short:
             notes.append(f'the search stopped at its limits (at most {walk.max_files} robot '
                          f'files, {walk.max_entries} folder entries in one call): '
