@@ -19,7 +19,6 @@ The parameters are declared in parameters.py, and every one that is not read-onl
 effect as soon as it is set. What the simulation logs reaches the node's logger (and /rosout).
 """
 
-import inspect
 import os
 import time
 
@@ -43,7 +42,7 @@ from service_tutorial.world_node.gazebo_services import GazeboServices
 from service_tutorial.world_node.log_forwarding import forward_core_logs
 from service_tutorial.world_node.model_interface import ModelInterface
 from service_tutorial.world_node.pacing import CLOCK_STREAM, JOINT_STATES_STREAM
-from service_tutorial.world_node.pacing import ODOMETRY_STREAM, Pacer
+from service_tutorial.world_node.pacing import heard_by_pacer, ODOMETRY_STREAM, Pacer
 from service_tutorial.world_node.parameters import declare_world_parameters, run_or_exit
 from service_tutorial.world_node.requested_steps import RequestedSteps
 from service_tutorial.world_node.ros_names import normalise_namespace
@@ -121,25 +120,8 @@ class MujocoWorld(Node):
 
     def create_service(self, srv_type, srv_name, callback, **kwargs):
         """Create a service whose answers the pacer hears of (Pacer.answered)."""
-        def answered():
-            pacer = getattr(self, 'pacer', None)  # the parameter services come first
-            if pacer is not None:
-                pacer.answered()
-
-        def answer(request, response):
-            try:
-                return callback(request, response)
-            finally:
-                answered()
-
-        async def answer_when_done(request, response):  # a callback that waits (stepping)
-            try:
-                return await callback(request, response)
-            finally:
-                answered()
-        return super().create_service(
-            srv_type, srv_name,
-            answer_when_done if inspect.iscoroutinefunction(callback) else answer, **kwargs)
+        return super().create_service(srv_type, srv_name, heard_by_pacer(self, callback),
+                                      **kwargs)
 
     def _start(self, parameters, sensor_participant):
         """Make the world, its services and topics, and the start-up models."""
