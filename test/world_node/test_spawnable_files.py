@@ -60,9 +60,11 @@ def test_the_walk_stops_at_its_limits(share):
     walk = FileWalk(max_files=2)
     walk.walk_package('pkg', os.path.realpath(share))
     assert len(walk.found) == 2 and walk.skipped == 1 and walk.cut_short
-    walk = FileWalk(max_entries=3)
-    walk.walk_package('pkg', os.path.realpath(share))
-    assert walk.cut_short
+    # urdf/ holds 6 entries, a/ 1, b/ 1, c/ 2 (d/ is a fourth level down, not looked into).
+    for max_entries, cut_short in ((10, False), (9, True), (3, True)):
+        walk = FileWalk(max_entries=max_entries)
+        walk.walk_package('pkg', os.path.realpath(share))
+        assert walk.cut_short == cut_short, max_entries
 
 
 def test_sources_keep_to_the_installed_shares(share, tmp_path):
@@ -115,7 +117,7 @@ def test_what_is_no_robot_is_left_out_with_the_reason(share):
         'badmacro.urdf.xacro': ('<robot name="x" xmlns:xacro="http://www.ros.org/wiki/xacro">'
                                 '<xacro:nothing/></robot>', 'xacro cannot expand'),
         'latin1.urdf': (None, 'it is not UTF-8 text'),
-        'sdf.urdf': ('<sdf version="1.9"/>', 'it has no links'),
+        'sdf.urdf': ('<sdf version="1.9"/>', 'it is not URDF: its root element is <sdf>'),
         'massless.urdf': ('<robot name="m"><link name="body"><collision><geometry><box '
                           'size="1 1 1"/></geometry></collision></link></robot>',
                           'mass and inertia of moving bodies'),

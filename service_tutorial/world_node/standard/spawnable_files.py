@@ -16,6 +16,7 @@ from the caller.
 
 import collections
 from dataclasses import dataclass
+import itertools
 import math
 import os
 import time
@@ -153,7 +154,7 @@ class FileWalk:
     @property
     def cut_short(self):
         """Tell whether a limit stopped the walk."""
-        return self.skipped > 0 or self._entries_left <= 0
+        return self.skipped > 0 or self._entries_left < 0
 
     def walk_package(self, package, share):
         """Add the robot files of a package's (real) share: its urdf/, models/, mjcf/."""
@@ -164,16 +165,19 @@ class FileWalk:
 
     def walk(self, package, share, folder, depth=MAX_DEPTH):
         """Add the robot files in a folder of a package's (real) share and its subfolders."""
+        if self._entries_left < 0:
+            return
         try:
             with os.scandir(folder) as listing:
-                entries = sorted(listing, key=lambda entry: entry.name)
+                # One more than the walk may look at tells that the limit cut the folder short.
+                entries = list(itertools.islice(listing, self._entries_left + 1))
         except OSError:
             return
+        self._entries_left -= len(entries)
+        if self._entries_left < 0:
+            return
         subfolders = []
-        for entry in entries:
-            self._entries_left -= 1
-            if self._entries_left < 0:
-                return
+        for entry in sorted(entries, key=lambda entry: entry.name):
             if entry.is_dir(follow_symlinks=False):
                 subfolders.append(entry.path)
             elif entry.name.lower().endswith(URDF_EXTENSIONS + MJCF_EXTENSIONS):
@@ -258,7 +262,9 @@ class RobotFileReader:
         if is_xacro(path, text):
             text = expand_xacro(path)
         root = parse_xml(text.encode('utf-8'), 'it')
-        if root.tag != 'robot' or root.find('link') is None:
+        if root.tag != 'robot':
+            return LeftOut(uri, f'it is not URDF: its root element is <{root.tag[:40]}>')
+        if root.find('link') is None:
             return LeftOut(uri, 'it has no links: it is macros or properties for other files')
         description = load_urdf(text, base_dir=os.path.dirname(path),
                                 package_resolver=self._package_resolver)
