@@ -97,9 +97,13 @@ def test_the_feature_is_claimed(ros):
 
 def test_this_packages_robots_are_offered_with_drives_sensors_and_bounds(ros):
     world = ros.start_world(paused=True, real_time_factor=0.0)
+    model, data, time_before = world.node.world.model, world.node.world.data, world.now()
     response = spawnables(world)
     robots = offered(response)
     assert {TINYBOT_URI, R2D2_URI} <= set(robots)
+    # Compiled alone: the world's model and data are the ones it had, its time where it was.
+    assert world.node.world.model is model and world.node.world.data is data
+    assert world.node.world.time == time_before and world.models() == ['tinybot']
     # The yard is the world's scenery, already there: not offered.
     assert 'package://service_tutorial/models/yard.urdf' not in robots
     tinybot = robots[TINYBOT_URI].description
@@ -177,6 +181,7 @@ def test_hostile_sources_are_named_and_nothing_outside_the_roots_is_read(ros, my
     (outside / 'mesh.obj').write_text('v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n')
     (share / 'linked').symlink_to(outside)
     (share / 'urdf' / 'escape.urdf').symlink_to(outside / 'secret.urdf')
+    (share / 'urdf' / 'linked_folder').symlink_to(outside)  # a folder link: never followed
     refused = [
         ('/etc', "source '/etc' is neither package://<package>/<folder> nor file://"),
         ('file:///etc', "source 'file:///etc' lies outside the share folders"),
@@ -204,7 +209,9 @@ def test_hostile_sources_are_named_and_nothing_outside_the_roots_is_read(ros, my
     assert opens.opened() == []
     # The defaults are still answered; nothing outside the roots is offered.
     assert {TINYBOT_URI, MY_ROBOT_URI} <= set(robots)
-    assert all(uri.startswith('package://') and 'linked' not in uri for uri in robots)
+    assert all(uri.startswith('package://') and 'linked' not in uri and 'secret' not in uri
+               for uri in robots)
+    assert 'secret' not in message
     assert ('package://my_description/urdf/escape.urdf: it is a link that leads outside the share '
             'folder of its package') in message
 

@@ -66,21 +66,7 @@ class SpawnableServices:
     def _list(self, sources, response):
         """Fill in the response's spawnables; return the notes for its message."""
         notes = []
-        shares = self.shares()
-        walk = FileWalk()
-        sources = list(sources)
-        if len(sources) > MAX_SOURCES:
-            notes.append(f'{len(sources)} sources are more than {MAX_SOURCES}; the '
-                         f'{len(sources) - MAX_SOURCES} after the first {MAX_SOURCES} are not '
-                         'read')
-            sources = sources[:MAX_SOURCES]
-        for source in sources:
-            try:
-                walk.walk(*source_folder(source, shares))
-            except SourceRefused as refusal:
-                notes.append(str(refusal))
-        for package, share in shares.items():
-            walk.walk_package(package, share)
+        walk = self._walk(sources, notes)
         left_out = [LeftOut(uri, 'it is a link that leads outside the share folder of its '
                             'package') for uri in walk.links_out]
         response.spawnables = []
@@ -98,19 +84,26 @@ class SpawnableServices:
                 response.spawnables.append(Spawnable(
                     uri=offer.uri, description=offer.description,
                     spawn_bounds=_bounds(offer.box)))
-        if left_out:
-            named = '; '.join(f'{item.uri}: {item.reason}' for item in left_out[:NAMED_LEFT_OUT])
-            more = (f'; and {len(left_out) - NAMED_LEFT_OUT} more'
-                    if len(left_out) > NAMED_LEFT_OUT else '')
-            notes.append(f'{len(left_out)} robot files are left out: {named}{more}')
-        if not_read:
-            notes.append(f'{not_read} robot files are not read yet: reading new files takes '
-                         f'at most {READING_SECONDS:g} s a call; ask again for them')
-        if walk.cut_short:
-            notes.append(f'the search stopped at its limits (at most {walk.max_files} robot '
-                         f'files, {walk.max_entries} folder entries in one call): '
-                         f'{walk.skipped} robot files more are not listed')
-        return notes
+        return notes + _notes(walk, left_out, not_read)
+
+    def _walk(self, sources, notes):
+        """Return the FileWalk of the sources and the installed packages; note what is refused."""
+        shares = self.shares()
+        walk = FileWalk()
+        sources = list(sources)
+        if len(sources) > MAX_SOURCES:
+            notes.append(f'{len(sources)} sources are more than {MAX_SOURCES}; the '
+                         f'{len(sources) - MAX_SOURCES} after the first {MAX_SOURCES} are not '
+                         'read')
+            sources = sources[:MAX_SOURCES]
+        for source in sources:
+            try:
+                walk.walk(*source_folder(source, shares))
+            except SourceRefused as refusal:
+                notes.append(str(refusal))
+        for package, share in shares.items():
+            walk.walk_package(package, share)
+        return walk
 
     def plugin_words(self, description):
         """Return a phrase for each plugin of a RobotDescription: 'a laser on scan'."""
@@ -129,6 +122,24 @@ class SpawnableServices:
             words.append(f'{article} {plugin.title} on {", ".join(topics)}' if topics
                          else f'{article} {plugin.title}')
         return words
+
+
+def _notes(walk, left_out, not_read):
+    """Return what the message says of the files left out, not read yet, or not looked at."""
+    notes = []
+    if left_out:
+        named = '; '.join(f'{item.uri}: {item.reason}' for item in left_out[:NAMED_LEFT_OUT])
+        more = (f'; and {len(left_out) - NAMED_LEFT_OUT} more'
+                if len(left_out) > NAMED_LEFT_OUT else '')
+        notes.append(f'{len(left_out)} robot files are left out: {named}{more}')
+    if not_read:
+        notes.append(f'{not_read} robot files are not read yet: reading new files takes at '
+                     f'most {READING_SECONDS:g} s a call; ask again for them')
+    if walk.cut_short:
+        notes.append(f'the search stopped at its limits (at most {walk.max_files} robot files, '
+                     f'{walk.max_entries} folder entries in one call): {walk.skipped} robot '
+                     'files more are not listed')
+    return notes
 
 
 def _bounds(box):
