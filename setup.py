@@ -12,7 +12,7 @@ setup(
         ('share/ament_index/resource_index/packages', ['resource/' + package_name]),
         ('share/' + package_name, ['package.xml']),
         ('share/' + package_name + '/models', glob('models/*.urdf') + glob('models/*.xml')),
-        ('share/' + package_name + '/worlds', glob('worlds/*.world.xml')),
+        ('share/' + package_name + '/worlds', glob('worlds/*.xml')),
         ('share/' + package_name + '/config', glob('config/*.yaml') + glob('config/*.rviz')),
         ('share/' + package_name + '/launch', glob('launch/*.launch.py')),
     ],

@@ -20,13 +20,13 @@ from standard_interfaces import StandardWorld, TRIGGERS_ALLOWED
 # times the core's own build of the same world, plus the Trigger round trips.
 LOAD_LIMIT = 3.0
 WORLDS = {'parking': 'parking_spot', 'yard': 'r2d2_spawn'}  # world -> where R2-D2 goes
-SCENERY = {'parking': 'parking.xml', 'yard': 'yard.urdf'}
+SCENERY = {'parking': ('parking.xml', 'worlds'), 'yard': ('yard.urdf', 'models')}
 
 
-def model_file(name):
-    """Return the path of a file this package installs in models/."""
+def model_file(name, folder='models'):
+    """Return the path of a file this package installs in models/ (or another folder)."""
     from ament_index_python.packages import get_package_share_directory
-    return os.path.join(get_package_share_directory('service_tutorial'), 'models', name)
+    return os.path.join(get_package_share_directory('service_tutorial'), folder, name)
 
 
 def core_world(scenery_path, tinybot):
@@ -57,7 +57,7 @@ def load_rounds(world, rounds):
                for kind in ('load', 'core', 'scenery', 'spawn', 'trigger')}
     for index in range(rounds + 1):  # the first warms up
         for name, pose_name in WORLDS.items():
-            path = model_file(SCENERY[name])
+            path = model_file(*SCENERY[name])
             taken = {'core': core_world(path, tinybot), 'scenery': scenery_compile(path),
                      'trigger': world.trigger()}
             taken['load'] = world.timed(LoadWorld, '/load_world', LoadWorld.Request(

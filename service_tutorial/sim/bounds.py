@@ -6,11 +6,12 @@ Every collision geom of a model is taken as the oriented box MuJoCo keeps around
 spheres, cylinders and capsules along their axes, and the mesh's own box for meshes. A sphere
 overlaps a box when the box's closest point to the centre is within the radius; an
 axis-aligned box by separating axes; a convex hull by GJK on the hull's points and the box's
-corners. Only numpy, no ROS.
+corners. No ROS.
 """
 
 from dataclasses import dataclass
 
+import mujoco
 import numpy as np
 from service_tutorial.sim.description import COLLISION_GROUP
 
@@ -44,9 +45,14 @@ class OrientedBoxes:
 def collision_boxes(world, model):
     """Return the OrientedBoxes around the collision geoms of a world's model."""
     world.body_state(model.root_id)  # brings the world's kinematics up to date
-    mj_model, data = world.model, world.data
+    mj_model = world.model
     geoms = np.flatnonzero((mj_model.geom_group == COLLISION_GROUP)
                            & (mj_model.body_rootid[mj_model.geom_bodyid] == model.root_id))
+    return geom_boxes(mj_model, world.data, geoms)
+
+
+def geom_boxes(mj_model, data, geoms):
+    """Return the OrientedBoxes around some geoms of a compiled model whose kinematics are done."""
     rotations = data.geom_xmat[geoms].reshape(-1, 3, 3)
     aabb = mj_model.geom_aabb[geoms]
     centres = data.geom_xpos[geoms] + np.einsum('nij,nj->ni', rotations, aabb[:, :3])
@@ -60,13 +66,33 @@ def box_in_base_frame(world, model):
     The corners are in the frame of the model's base (root) link; None: it has no collision
     geometry.
     """
-    boxes = collision_boxes(world, model)
+    return box_in_body_frame(collision_boxes(world, model), world.data, model.root_id)
+
+
+def box_in_body_frame(boxes, data, body_id):
+    """Return (lower, upper) corners of the box around boxes in a body's frame, or None."""
     if not len(boxes):
         return None
-    data = world.data
-    rotation = data.xmat[model.root_id].reshape(3, 3)
-    local = (boxes.corners().reshape(-1, 3) - data.xpos[model.root_id]) @ rotation
+    rotation = data.xmat[body_id].reshape(3, 3)
+    local = (boxes.corners().reshape(-1, 3) - data.xpos[body_id]) @ rotation
     return local.min(axis=0), local.max(axis=0)
+
+
+def description_box(description):
+    """
+    Return the box around a RobotDescription's collision geometry in its root link's frame.
+
+    The robot's spec is compiled alone, away from any world, so the box is the one
+    box_in_base_frame() gives once it is spawned. (lower, upper), or None without collision
+    geometry.
+    """
+    mj_model = description.spec.compile()
+    data = mujoco.MjData(mj_model)
+    mujoco.mj_kinematics(mj_model, data)
+    root = mj_model.body(description.root_link).id
+    geoms = np.flatnonzero((mj_model.geom_group == COLLISION_GROUP)
+                           & (mj_model.body_rootid[mj_model.geom_bodyid] == root))
+    return box_in_body_frame(geom_boxes(mj_model, data, geoms), data, root)
 
 
 def overlaps_sphere(boxes, centre, radius):

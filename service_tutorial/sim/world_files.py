@@ -4,7 +4,7 @@ World files: a world's scenery, its start-up models and its named poses, in one 
     <world name="parking">
       <description>A wall with a crate before it, to park tinybot in front of.</description>
       <tag>lesson</tag>
-      <scenery uri="package://service_tutorial/models/parking.xml"/>
+      <scenery uri="package://service_tutorial/worlds/parking.xml"/>
       <named_pose name="parking_spot">
         <description>In front of the crate, facing it</description>
         <tag>parking</tag>

@@ -19,7 +19,6 @@ The parameters are declared in parameters.py, and every one that is not read-onl
 effect as soon as it is set. What the simulation logs reaches the node's logger (and /rosout).
 """
 
-import inspect
 import time
 
 from ament_index_python.packages import get_package_share_directory
@@ -40,7 +39,7 @@ from service_tutorial.world_node.gazebo_services import GazeboServices
 from service_tutorial.world_node.log_forwarding import forward_core_logs
 from service_tutorial.world_node.model_interface import ModelInterface
 from service_tutorial.world_node.pacing import CLOCK_STREAM, JOINT_STATES_STREAM
-from service_tutorial.world_node.pacing import ODOMETRY_STREAM, Pacer
+from service_tutorial.world_node.pacing import heard_by_pacer, ODOMETRY_STREAM, Pacer
 from service_tutorial.world_node.parameters import declare_world_parameters, default_parameters
 from service_tutorial.world_node.parameters import run_or_exit
 from service_tutorial.world_node.requested_steps import RequestedSteps
@@ -99,25 +98,8 @@ class MujocoWorld(Node):
 
     def create_service(self, srv_type, srv_name, callback, **kwargs):
         """Create a service whose answers the pacer hears of (Pacer.answered)."""
-        def answered():
-            pacer = getattr(self, 'pacer', None)  # the parameter services come first
-            if pacer is not None:
-                pacer.answered()
-
-        def answer(request, response):
-            try:
-                return callback(request, response)
-            finally:
-                answered()
-
-        async def answer_when_done(request, response):  # a callback that waits (stepping)
-            try:
-                return await callback(request, response)
-            finally:
-                answered()
-        return super().create_service(
-            srv_type, srv_name,
-            answer_when_done if inspect.iscoroutinefunction(callback) else answer, **kwargs)
+        return super().create_service(srv_type, srv_name, heard_by_pacer(self, callback),
+                                      **kwargs)
 
     def _start(self, parameters, sensor_participant):
         """Make the world, its services and topics, and the start-up models."""
@@ -126,6 +108,7 @@ class MujocoWorld(Node):
         from service_tutorial.sim.world import World
         from service_tutorial.world_node.standard.entities import EntityServices
         from service_tutorial.world_node.standard.named_poses import NamedPoseServices
+        from service_tutorial.world_node.standard.spawnables import SpawnableServices
         from service_tutorial.world_node.standard.worlds import WorldServices
         from service_tutorial.world_node.world_loader import resolve_model_path, WorldLoader
         self.world_loader = WorldLoader(self, get_package_share_directory)
@@ -167,7 +150,7 @@ class MujocoWorld(Node):
         self.standard_groups = [
             simulation, self.stepping_services, EntityServices(self),
             WorldServices(self, simulation, get_package_share_directory),
-            NamedPoseServices(self)]
+            NamedPoseServices(self), SpawnableServices(self)]
         self.feature_service = FeatureService(self, self.standard_groups)
         # ~/camera/image_raw, ~/camera/camera_info (camera_enabled) and ~/save_snapshot.
         self.camera_stream = CameraStream(self, self.world, parameters)

@@ -51,6 +51,7 @@ set_period): the pace changes from the current simulation time on, and a stream'
 moves by the change of its period.
 """
 
+import inspect
 import math
 import time
 
@@ -86,6 +87,31 @@ MAX_DEFERRAL = 0.1
 # caller's next call: a local client sends it about 1 ms after the answer.
 FOLLOW_UP = 0.01
 NANOSECONDS = 1_000_000_000
+
+
+def heard_by_pacer(node, callback):
+    """
+    Return a service callback that tells node.pacer (Pacer.answered) each time it has answered.
+
+    The node's parameter services come before its pacer, which they leave alone.
+    """
+    def answered():
+        pacer = getattr(node, 'pacer', None)
+        if pacer is not None:
+            pacer.answered()
+
+    def answer(request, response):
+        try:
+            return callback(request, response)
+        finally:
+            answered()
+
+    async def answer_when_done(request, response):  # a callback that waits (stepping)
+        try:
+            return await callback(request, response)
+        finally:
+            answered()
+    return answer_when_done if inspect.iscoroutinefunction(callback) else answer
 
 
 class Pacer:

@@ -115,14 +115,13 @@ class Goal:
 
 # --- features ---------------------------------------------------------------------------------
 
-def test_every_feature_but_spawnables_is_claimed(fast_world):
+def test_all_32_features_are_claimed(fast_world):
     features = fast_world.call(GetSimulatorFeatures, '/get_simulator_features',
                                GetSimulatorFeatures.Request()).features
     every = {value for name, value in vars(SimulatorFeatures).items()
              if name.isupper() and isinstance(value, int)}
     assert len(every) == 32
-    later = {SimulatorFeatures.SPAWNABLES}
-    assert list(features.features) == sorted(every - later)
+    assert list(features.features) == sorted(every)
     assert list(features.spawn_formats) == ['urdf']
     assert 'MuJoCo' in features.custom_info
 

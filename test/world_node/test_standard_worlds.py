@@ -214,7 +214,7 @@ def test_named_pose_names_and_filters_of_any_size(world):
 
 def test_a_world_and_a_scenery_load_from_text(world):
     text = ('<world name="text_world"><tag>text</tag>'
-            '<scenery uri="package://service_tutorial/models/parking.xml"/>'
+            '<scenery uri="package://service_tutorial/worlds/parking.xml"/>'
             '<named_pose name="here"><origin xyz="1 2 0"/></named_pose>'
             '<model name="bot" uri="package://service_tutorial/models/tinybot.urdf" '
             'pose="here"/></world>')

@@ -1,0 +1,342 @@
+"""
+The robot files of installed ament packages that a spawn uri may name, found and read once.
+
+A robot file lies in a package share's urdf/, models/ or mjcf/ folder (or a folder a request
+names as a source), at most MAX_DEPTH folders below it: a .urdf, a .xacro expanded with its
+default arguments, or an MJCF .xml/.mjcf whose root is <mujoco>. The same roots as a spawn
+uri's hold (resources.py): a source is package://<package>/<folder> or file://<folder> in an
+installed share, with no '..'; links to folders are not followed, a file whose link leads out of
+its share is left out unread. Reading a file (expanding, building, compiling it alone) is kept
+under its uri, real path, modification time and size, so a second call costs only the walk;
+a call reads new files for READING_SECONDS at most and leaves the rest to the next, so a world
+with many packages is not held up for long. (A xacro file whose includes change while it does
+not is read again only once it changes too.) No rclpy: the words for a robot's plugins come
+from the caller.
+"""
+
+import collections
+from dataclasses import dataclass
+import itertools
+import math
+import os
+import time
+
+from ament_index_python.packages import get_packages_with_prefixes
+import mujoco
+import numpy as np
+from service_tutorial.robot_files import expand_xacro, file_model_name, is_xacro
+from service_tutorial.robot_files import RobotFileError
+from service_tutorial.sim import bounds
+from service_tutorial.sim.description import UrdfError
+from service_tutorial.sim.urdf.builder import load_urdf
+from service_tutorial.sim.urdf.hardened_xml import MAX_MODEL_XML_BYTES, parse_xml
+from service_tutorial.sim.validation import quoted
+
+ROBOT_FOLDERS = ('urdf', 'models', 'mjcf')
+URDF_EXTENSIONS = ('.urdf', '.xacro')
+MJCF_EXTENSIONS = ('.xml', '.mjcf')
+MAX_DEPTH = 3  # folders below a robot folder or a source
+MAX_SOURCE_LENGTH = 4096
+MAX_SOURCES = 32
+MAX_FILES = 500  # robot files one call reads or takes from the cache
+MAX_ENTRIES = 20000  # folder entries one call looks at
+CACHED_FILES = 2000
+# MJCF attributes that name files or folders MuJoCo reads.
+MJCF_FILE_ATTRIBUTES = ('file', 'fileback', 'filedown', 'filefront', 'fileleft', 'fileright',
+                        'fileup', 'meshdir', 'texturedir', 'assetdir')
+MAX_MJCF_INCLUDES = 20
+# Wall time one call spends reading files it has not read before; the rest wait for a next call.
+READING_SECONDS = 5.0
+# What read() returns for a file left for a next call.
+NOT_READ = 'not read'
+
+
+class SourceRefused(Exception):
+    """A source folder that is not read; the message names it and says why."""
+
+
+@dataclass(frozen=True)
+class RobotFileOffer:
+    """A robot file to offer: its uri, what it is, and its box in its own frame (or None)."""
+
+    uri: str
+    description: str
+    box: tuple  # (lower, upper) corners, or None: no collision geometry
+
+
+@dataclass(frozen=True)
+class LeftOut:
+    """A robot file that is not offered, and why."""
+
+    uri: str
+    reason: str
+
+
+def package_shares():
+    """Return {package: real share folder} of every installed ament package, by name."""
+    shares = {}
+    for package, prefix in sorted(get_packages_with_prefixes().items()):
+        share = os.path.join(prefix, 'share', package)
+        if _valid_package(package) and os.path.isdir(share):
+            shares[package] = os.path.realpath(share)
+    return shares
+
+
+def source_folder(source, shares):
+    """
+    Return (package, real share, real folder) of a source, or raise SourceRefused.
+
+    shares: {package: real share folder} of the installed packages.
+    """
+    shown = quoted(source)
+    if len(source) > MAX_SOURCE_LENGTH:
+        raise SourceRefused(f'source {shown} is longer than {MAX_SOURCE_LENGTH} characters')
+    scheme, separator, rest = source.partition('://')
+    if not separator or scheme not in ('package', 'file'):
+        raise SourceRefused(f'source {shown} is neither package://<package>/<folder> nor '
+                            'file://<absolute folder>')
+    if '..' in rest.split('/') or '\0' in rest:
+        raise SourceRefused(f"source {shown} must not contain '..'")
+    if scheme == 'package':
+        package, _, relative = rest.partition('/')
+        if package not in shares:
+            raise SourceRefused(f'source {shown}: package {quoted(package)} is not installed')
+        share = shares[package]
+        candidate = os.path.join(share, relative)
+    else:
+        if not rest.startswith('/'):
+            raise SourceRefused(f'source {shown} is not an absolute path')
+        candidate = os.path.normpath(rest)
+        package, share = _share_holding(candidate, shares)
+        if share is None:
+            raise SourceRefused(f'source {shown} lies outside the share folders of the '
+                                'installed packages')
+    folder = os.path.realpath(candidate)
+    if not _within(folder, share):
+        raise SourceRefused(f'source {shown} leads outside the share folder of its package')
+    if not os.path.isdir(folder):
+        raise SourceRefused(f'source {shown} names no folder')
+    return package, share, folder
+
+
+def _share_holding(path, shares):
+    """Return (package, share) of the share a path is written under (.../share/<pkg>/...)."""
+    parts = path.split(os.sep)
+    for index in range(len(parts) - 1):
+        package = parts[index + 1]
+        if parts[index] == 'share' and package in shares and os.path.realpath(
+                os.sep.join(parts[:index + 2])) == shares[package]:
+            return package, shares[package]
+    return None, None
+
+
+def _valid_package(package):
+    return bool(package) and all(character.isalnum() or character == '_'
+                                 for character in package)
+
+
+def _within(path, root):
+    return path == root or path.startswith(root.rstrip(os.sep) + os.sep)
+
+
+class FileWalk:
+    """The robot files of one call, found folder by folder within the call's limits."""
+
+    def __init__(self, max_files=MAX_FILES, max_entries=MAX_ENTRIES):
+        """Find at most max_files files, looking at most at max_entries folder entries."""
+        self.found = {}  # uri -> real path, in the order found
+        self.links_out = []  # uris of files whose links lead out of their share
+        self.skipped = 0  # robot files past max_files
+        self.max_files = max_files
+        self.max_entries = max_entries
+        self._entries_left = max_entries
+
+    @property
+    def cut_short(self):
+        """Tell whether a limit stopped the walk."""
+        return self.skipped > 0 or self._entries_left < 0
+
+    def walk_package(self, package, share):
+        """Add the robot files of a package's (real) share: its urdf/, models/, mjcf/."""
+        for name in ROBOT_FOLDERS:
+            folder = os.path.join(share, name)
+            if os.path.isdir(folder) and not os.path.islink(folder):
+                self.walk(package, share, folder)
+
+    def walk(self, package, share, folder, depth=MAX_DEPTH):
+        """Add the robot files in a folder of a package's (real) share and its subfolders."""
+        if self._entries_left < 0:
+            return
+        try:
+            with os.scandir(folder) as listing:
+                # One more than the walk may look at tells that the limit cut the folder short.
+                entries = list(itertools.islice(listing, self._entries_left + 1))
+        except OSError:
+            return
+        self._entries_left -= len(entries)
+        if self._entries_left < 0:
+            return
+        subfolders = []
+        for entry in sorted(entries, key=lambda entry: entry.name):
+            if entry.is_dir(follow_symlinks=False):
+                subfolders.append(entry.path)
+            elif entry.name.lower().endswith(URDF_EXTENSIONS + MJCF_EXTENSIONS):
+                self._add(package, share, entry)
+        if depth > 0:
+            for subfolder in subfolders:
+                self.walk(package, share, subfolder, depth - 1)
+
+    def _add(self, package, share, entry):
+        uri = f'package://{package}/{os.path.relpath(entry.path, share)}'
+        if uri in self.found or uri in self.links_out:
+            return
+        path = os.path.realpath(entry.path)
+        if not _within(path, share):
+            self.links_out.append(uri)
+        elif not os.path.isfile(path):
+            return
+        elif len(self.found) >= self.max_files:
+            self.skipped += 1
+        else:
+            self.found[uri] = path
+
+
+class RobotFileReader:
+    """Reads robot files into RobotFileOffers or LeftOuts, keeping each answer for next time."""
+
+    def __init__(self, package_resolver, plugin_words, size=CACHED_FILES):
+        """
+        Read with package_resolver (package -> share) for meshes and includes.
+
+        plugin_words(description) returns a phrase for each plugin of a RobotDescription
+        ('a diff-drive on cmd_vel').
+        """
+        self._package_resolver = package_resolver
+        self._plugin_words = plugin_words
+        self._size = size
+        # (uri, real path, mtime, size) -> RobotFileOffer, LeftOut or None
+        self._kept = collections.OrderedDict()
+
+    def read(self, uri, path, *, deadline=math.inf):
+        """
+        Return the RobotFileOffer of a file, its LeftOut, or None if it is no robot file.
+
+        A file not read before is read only until time.monotonic() passes deadline: after it,
+        NOT_READ.
+        """
+        try:
+            status = os.stat(path)
+        except OSError as error:
+            return LeftOut(uri, f'it cannot be read: {error.strerror}')
+        key = (uri, path, status.st_mtime_ns, status.st_size)
+        if key in self._kept:
+            self._kept.move_to_end(key)
+            return self._kept[key]
+        if time.monotonic() > deadline:
+            return NOT_READ
+        answer = self._read_new(uri, path, status.st_size)
+        self._kept[key] = answer
+        while len(self._kept) > self._size:
+            self._kept.popitem(last=False)
+        return answer
+
+    def _read_new(self, uri, path, size):
+        if size > MAX_MODEL_XML_BYTES:
+            return LeftOut(uri, f'it is larger than the limit of {MAX_MODEL_XML_BYTES} bytes')
+        try:
+            with open(path, 'rb') as robot_file:
+                data = robot_file.read(MAX_MODEL_XML_BYTES + 1)
+            text = data.decode('utf-8')
+        except OSError as error:
+            return LeftOut(uri, f'it cannot be read: {error.strerror}')
+        except UnicodeDecodeError:
+            return LeftOut(uri, 'it is not UTF-8 text')
+        try:
+            if path.lower().endswith(MJCF_EXTENSIONS):
+                return self._read_mjcf(uri, path, data)
+            return self._read_urdf(uri, path, text)
+        except (UrdfError, RobotFileError, ValueError) as error:
+            return LeftOut(uri, _one_line(error))
+
+    def _read_urdf(self, uri, path, text):
+        if is_xacro(path, text):
+            text = expand_xacro(path)
+        root = parse_xml(text.encode('utf-8'), 'it')
+        if root.tag != 'robot':
+            return LeftOut(uri, f'it is not URDF: its root element is <{root.tag[:40]}>')
+        if root.find('link') is None:
+            return LeftOut(uri, 'it has no links: it is macros or properties for other files')
+        description = load_urdf(text, base_dir=os.path.dirname(path),
+                                package_resolver=self._package_resolver)
+        name = description.robot_name or file_model_name(path)
+        words = list(self._plugin_words(description)) or ['no drive or sensors']
+        if description.anchored:
+            words.append('fixed to the world')
+        return RobotFileOffer(uri, f'{name}: {"; ".join(words)}',
+                              bounds.description_box(description))
+
+    def _read_mjcf(self, uri, path, data):
+        root = parse_xml(data, 'it')
+        if root.tag != 'mujoco':
+            return None  # an .xml file of another kind: no robot file
+        share = _share_of(path, self._package_resolver, uri)
+        _check_mjcf_files(root, os.path.dirname(path), share, uri, set())
+        spec = mujoco.MjSpec.from_file(path)
+        mj_model = spec.compile()
+        data = mujoco.MjData(mj_model)
+        mujoco.mj_kinematics(mj_model, data)
+        colliding = np.flatnonzero((mj_model.geom_contype != 0)
+                                   | (mj_model.geom_conaffinity != 0))
+        box = bounds.box_in_body_frame(bounds.geom_boxes(mj_model, data, colliding), data, 0)
+        name = spec.modelname or file_model_name(path)
+        return RobotFileOffer(uri, f'{name}: MJCF, {mj_model.nu} actuators, '
+                              f'{mj_model.nsensor} sensors', box)
+
+
+def _share_of(path, package_resolver, uri):
+    package = uri[len('package://'):].partition('/')[0]
+    return os.path.realpath(package_resolver(package))
+
+
+def _check_mjcf_files(root, folder, share, uri, seen):
+    """Refuse an MJCF file that names a file outside its share, also through its includes."""
+    named = [(element, attribute, element.get(attribute)) for element in root.iter()
+             if isinstance(element.tag, str) for attribute in MJCF_FILE_ATTRIBUTES
+             if element.get(attribute) is not None]
+    for _, _, value in named:
+        if value.startswith('/') or ':' in value or '..' in value.split('/') or '\0' in value:
+            raise ValueError(f'it names file {quoted(value)}, which is not a plain path inside '
+                             'its folder')
+    # A file may be read from the model's folder or from below its meshdir, texturedir...
+    bases = [folder] + [os.path.join(folder, value) for _, attribute, value in named
+                        if attribute.endswith('dir')]
+    for element, attribute, value in named:
+        for base in bases:
+            target = os.path.realpath(os.path.join(base, value))
+            if not _within(target, share):
+                raise ValueError(f'it names file {quoted(value)}, which leads outside the share '
+                                 'folder of its package')
+        if element.tag == 'include' and attribute == 'file':
+            _check_include(os.path.realpath(os.path.join(folder, value)), folder, share, uri,
+                           seen)
+
+
+def _check_include(target, folder, share, uri, seen):
+    if target in seen:
+        return
+    seen.add(target)
+    if len(seen) > MAX_MJCF_INCLUDES:
+        raise ValueError(f'it includes more than {MAX_MJCF_INCLUDES} files')
+    try:
+        if os.path.getsize(target) > MAX_MODEL_XML_BYTES:
+            raise ValueError(f'it includes a file larger than {MAX_MODEL_XML_BYTES} bytes')
+        with open(target, 'rb') as included:
+            data = included.read(MAX_MODEL_XML_BYTES + 1)
+    except OSError as error:
+        raise ValueError(f'it includes a file that cannot be read: {error.strerror}') from None
+    _check_mjcf_files(parse_xml(data, 'an included file'), folder, share, uri, seen)
+
+
+def _one_line(error):
+    text = str(error) or type(error).__name__
+    return ' '.join(line.strip() for line in text.splitlines() if line.strip())
