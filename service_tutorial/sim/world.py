@@ -49,7 +49,7 @@ def _route_mujoco_messages():
 
 class World:
     """
-    A MuJoCo world with a ground plane into which URDF robots are spawned and deleted.
+    A MuJoCo world with a ground plane into which URDF and MJCF robots are spawned and deleted.
 
     rebuild(), forward(), state_changed(), schedule_events(), schedule_event() and
     body_state() are there for the core's own pieces, recovery and plugins; nodes use the rest.
@@ -146,14 +146,25 @@ class World:
 
         placement: position, orientation, reference_frame and base_dir, as in a SpawnOrder.
         """
-        outcome, = self.spawn_urdf_batch([SpawnOrder(name, urdf_xml, **placement)])
+        return self._spawn(SpawnOrder(name, urdf_xml, **placement))
+
+    def spawn_mjcf(self, name, mjcf_xml, **placement):
+        """
+        Add an MJCF robot or object (sim/mjcf.py) and return its Model, as spawn_urdf() does.
+
+        placement: as for spawn_urdf(); base_dir is the folder its mesh files resolve from.
+        """
+        return self._spawn(SpawnOrder(name, mjcf_xml, format='mjcf', **placement))
+
+    def _spawn(self, order):
+        outcome, = self.spawn_urdf_batch([order])
         if isinstance(outcome, WorldError):
             raise outcome
         return outcome
 
     def spawn_urdf_batch(self, orders):
         """
-        Add the robots of several SpawnOrders with one recompile; log their notes.
+        Add the robots of several SpawnOrders, URDF or MJCF, with one recompile; log their notes.
 
         Return a Model or the WorldError that refused it, for each order in order. A refused
         order changes nothing and leaves the others to spawn. Should the batch not compile or

@@ -350,7 +350,8 @@ class MujocoWorld(Node):
         for index, (order, namespace) in enumerate(zip(orders, namespaces)):
             if not isinstance(outcomes[index], WorldError):
                 try:
-                    self._give_interface(outcomes[index], namespace, order.urdf_xml)
+                    self._give_interface(outcomes[index], namespace,
+                                         order.urdf_xml if order.format == 'urdf' else None)
                     outcomes[index] = left_out_of(outcomes[index].description)
                 except Exception as error:  # the model is gone again; the others go on
                     outcomes[index] = error
