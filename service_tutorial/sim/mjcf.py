@@ -56,6 +56,7 @@ REFUSED_ANYWHERE = ('plugin', 'flexcomp', 'composite', 'attach', 'skin', 'flex')
 # Folder attributes of <compiler> that a mesh file is found by, in MuJoCo's order.
 MESH_FOLDERS = ('meshdir', 'assetdir')
 _HINGE_AND_SLIDE = (mujoco.mjtJoint.mjJNT_HINGE, mujoco.mjtJoint.mjJNT_SLIDE)
+_WORLD_SHAPES = (int(mujoco.mjtGeom.mjGEOM_PLANE), int(mujoco.mjtGeom.mjGEOM_HFIELD))
 
 
 def load_mjcf(model_xml, *, base_dir=None, package_resolver=None):
@@ -261,7 +262,7 @@ def _name_elements(spec):
 def _check_sizes(compiled):
     """Refuse a geom larger than MAX_SIZE across; planes are infinite and refused."""
     for geom in range(compiled.ngeom):
-        if compiled.geom_type[geom] in (mujoco.mjtGeom.mjGEOM_PLANE, mujoco.mjtGeom.mjGEOM_HFIELD):
+        if int(compiled.geom_type[geom]) in _WORLD_SHAPES:
             raise DescriptionError('MJCF has a plane, which only the world may have')
         extent = 2.0 * float(compiled.geom_rbound[geom])
         if extent > MAX_SIZE:

@@ -154,7 +154,7 @@ class World:
 
         placement: as for spawn_urdf(); base_dir is the folder its mesh files resolve from.
         """
-        return self._spawn(SpawnOrder(name, mjcf_xml, format='mjcf', **placement))
+        return self._spawn(SpawnOrder(name, mjcf_xml, model_format='mjcf', **placement))
 
     def _spawn(self, order):
         outcome, = self.spawn_urdf_batch([order])

@@ -351,7 +351,7 @@ class MujocoWorld(Node):
             if not isinstance(outcomes[index], WorldError):
                 try:
                     self._give_interface(outcomes[index], namespace,
-                                         order.urdf_xml if order.format == 'urdf' else None)
+                                         order.urdf_xml if order.model_format == 'urdf' else None)
                     outcomes[index] = left_out_of(outcomes[index].description)
                 except Exception as error:  # the model is gone again; the others go on
                     outcomes[index] = error

@@ -128,7 +128,7 @@ def test_every_feature_but_worlds_named_poses_and_spawnables_is_claimed(fast_wor
              SimulatorFeatures.WORLD_UNLOADING, SimulatorFeatures.WORLD_INFO_GETTING,
              SimulatorFeatures.AVAILABLE_WORLDS}
     assert list(features.features) == sorted(every - later)
-    assert list(features.spawn_formats) == ['urdf']
+    assert list(features.spawn_formats) == ['urdf', 'mjcf']
     assert 'MuJoCo' in features.custom_info
 
 
