@@ -19,7 +19,8 @@ builtin textures and colours are not. Refused as well (DescriptionError): a worl
 body, with more than one, or with elements of its own; a top body in a <frame> or a mocap
 body; what the world would leave behind when the entity goes, or what acts beyond it
 (tendons, equality constraints, keyframes, contact pairs, flexes, skins, heightfields, engine
-plugins, custom data); shapes larger than MAX_SIZE; MJCF that MuJoCo does not compile.
+plugins, custom data, a skybox); shapes larger than MAX_SIZE; MJCF that MuJoCo does not
+compile.
 
 The world's physics stays the world's: <option>, <size>, <visual> and <statistic> are ignored,
 each with a note, rather than changing the timestep or gravity for every model.
@@ -162,6 +163,9 @@ def _checked_sections(root):
                                        f'in a spawned entity; <{section.tag}> may hold '
                                        f'{", ".join(f"<{tag}>" for tag in allowed)}')
     for texture in root.iter('texture'):
+        if texture.get('type') == 'skybox':
+            raise DescriptionError(f'MJCF texture {quoted(texture.get("name") or "")} is a '
+                                   "skybox, which would change the whole world's sky")
         for attribute in texture.attrib:
             if attribute.startswith('file'):
                 raise AssetError(f'MJCF texture file {quoted(texture.get(attribute))} is not '

@@ -143,7 +143,9 @@ def test_mesh_files_are_read_from_the_mjcf_folder_and_nowhere_else(tmp_path):
     world = World()
     model = world.spawn_mjcf('boxy', text, base_dir=str(folder), position=(0.0, 0.0, 1.0))
     assert model.description.mesh_files == (str(folder / 'meshes' / 'box.obj'),)
-    run(world, 0.5)
+    run(world, 1.5)
+    # The mesh is 0.1 x 0.06 x 0.04 m: the box rests 0.02 m up.
+    assert world.get_model_state('boxy').position == pytest.approx([0.0, 0.0, 0.02], abs=1e-3)
     before = contents(world)
     for filename, missing, message in [
             ('../../secret.obj', False, 'lies outside'),
@@ -166,6 +168,9 @@ HOSTILE_MJCF = [
     ('a texture file', mjcf('<body/>', sections='<asset><texture type="2d" file="t.png"/>'
                                                 '</asset>'), AssetError,
      "MJCF texture file 't.png' is not read"),
+    ('a skybox', mjcf('<body/>', sections='<asset><texture name="sky" type="skybox" '
+                                          'builtin="gradient" width="8" height="8"/></asset>'),
+     DescriptionError, "MJCF texture 'sky' is a skybox, which would change the whole world's"),
     ('two top bodies', mjcf('<body name="a"/><body name="b"/>'), DescriptionError,
      "MJCF worldbody holds 2 top-level bodies ('a', 'b'); an entity is one tree"),
     ('no body', mjcf(''), DescriptionError, 'MJCF worldbody holds no body'),
@@ -209,3 +214,19 @@ def test_hostile_mjcf_is_refused_naming_the_value_and_changes_nothing(what, text
     assert contents(world) == before
     for field, values in world.models['tinybot'].saved_state(world.data).items():
         assert np.array_equal(values, kept[field]), field
+
+
+def test_a_urdf_joint_state_publisher_block_names_the_joints_it_publishes():
+    block = ('<gazebo><plugin name="joints" filename="libgazebo_ros_joint_state_publisher.so">'
+             '<joint_name>wheel_right_joint</joint_name></plugin></gazebo></robot>')
+    world = World()
+    tinybot = world.spawn_urdf('tinybot', read_file(TINYBOT).replace('</robot>', block))
+    publisher = tinybot.plugin(JointStatePublisher)
+    run(world, 0.1)
+    names, positions, velocities = publisher.joint_state()
+    assert names == ['wheel_right_joint'] and positions.shape == velocities.shape == (1,)
+    assert not tinybot.description.ignored_plugins
+    with pytest.raises(DescriptionError, match="names joint 'caster_joint', which is not a "
+                                               'moving joint of the robot'):
+        world.spawn_urdf('other', read_file(TINYBOT).replace('</robot>', block.replace(
+            'wheel_right_joint', 'caster_joint')), position=(2.0, 0.0, 0.0))

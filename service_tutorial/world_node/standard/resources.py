@@ -54,7 +54,7 @@ def read_resource(uri, resource_string, package_share):
     """
     if uri:
         path = resource_path(uri, package_share)
-        return robot_text(_read_file(uri, path), os.path.dirname(path), quoted(uri))
+        return robot_text(_read_file(uri, path), os.path.dirname(path), f'uri {quoted(uri)}')
     if not resource_string:
         raise Refusal(SpawnResult.NO_RESOURCE, 'neither uri nor resource_string is given')
     return robot_text(resource_string, None, 'resource_string')
