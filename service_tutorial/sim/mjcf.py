@@ -27,6 +27,7 @@ each with a note, rather than changing the timestep or gravity for every model.
 """
 
 import os
+import types
 
 from lxml import etree
 import mujoco
@@ -35,8 +36,8 @@ from service_tutorial.sim.description import MAX_SIZE
 from service_tutorial.sim.description import UrdfError
 from service_tutorial.sim.plugins.joint_state_publisher import JOINT_STATE_PUBLISHER
 from service_tutorial.sim.plugins.joint_state_publisher import JointStateConfig
-from service_tutorial.sim.plugins.joint_state_publisher import mjcf_block
 from service_tutorial.sim.urdf.builder import RobotDescription
+from service_tutorial.sim.urdf.gazebo import PluginBlock
 from service_tutorial.sim.urdf.hardened_xml import MAX_MODEL_XML_BYTES
 from service_tutorial.sim.urdf.hardened_xml import parse_xml
 from service_tutorial.sim.urdf.meshes import MeshMissing
@@ -58,6 +59,10 @@ REFUSED_ANYWHERE = ('plugin', 'flexcomp', 'composite', 'attach', 'skin', 'flex')
 MESH_FOLDERS = ('meshdir', 'assetdir')
 _HINGE_AND_SLIDE = (mujoco.mjtJoint.mjJNT_HINGE, mujoco.mjtJoint.mjJNT_SLIDE)
 _WORLD_SHAPES = (int(mujoco.mjtGeom.mjGEOM_PLANE), int(mujoco.mjtGeom.mjGEOM_HFIELD))
+# The plugin block an MJCF model's joint state publisher stands for, as a URDF would write it.
+JOINT_STATES_BLOCK = PluginBlock(filename='libgazebo_ros_joint_state_publisher.so',
+                                 name='joint_state_publisher',
+                                 parameters=types.MappingProxyType({}))
 
 
 def load_mjcf(model_xml, *, base_dir=None, package_resolver=None):
@@ -105,7 +110,7 @@ def load_mjcf(model_xml, *, base_dir=None, package_resolver=None):
     free = any(kind == mujoco.mjtJoint.mjJNT_FREE for kind in joint_types)
     setups = ()
     if joints:
-        setups = (plugins.PluginSetup(JOINT_STATE_PUBLISHER, mjcf_block(),
+        setups = (plugins.PluginSetup(JOINT_STATE_PUBLISHER, JOINT_STATES_BLOCK,
                                       JointStateConfig(joint_names=joints)),)
     return RobotDescription(
         robot_name=root.get('model') or '', spec=spec, root_link=top.name, anchored=not free,

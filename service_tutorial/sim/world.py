@@ -146,17 +146,10 @@ class World:
 
         placement: position, orientation, reference_frame and base_dir, as in a SpawnOrder.
         """
-        return self._spawn(SpawnOrder(name, urdf_xml, **placement))
+        return self.spawn(SpawnOrder(name, urdf_xml, **placement))
 
-    def spawn_mjcf(self, name, mjcf_xml, **placement):
-        """
-        Add an MJCF robot or object (sim/mjcf.py) and return its Model, as spawn_urdf() does.
-
-        placement: as for spawn_urdf(); base_dir is the folder its mesh files resolve from.
-        """
-        return self._spawn(SpawnOrder(name, mjcf_xml, model_format='mjcf', **placement))
-
-    def _spawn(self, order):
+    def spawn(self, order):
+        """Add the robot of a SpawnOrder, URDF or MJCF (sim/mjcf.py); return its Model or raise."""
         outcome, = self.spawn_urdf_batch([order])
         if isinstance(outcome, WorldError):
             raise outcome

@@ -9,6 +9,7 @@ import pytest
 from repository import MJCF_ARM, MJCF_CRATE, read_file, TEST_MODELS, TINYBOT
 from service_tutorial.sim import bounds
 from service_tutorial.sim.plugins.joint_state_publisher import JointStatePublisher
+from service_tutorial.sim.spawning import SpawnOrder
 from service_tutorial.sim.validation import AssetError, DescriptionError
 from service_tutorial.sim.world import World
 from test_spawn_and_delete import contents
@@ -23,6 +24,11 @@ def run(world, seconds):
     world.step(round(seconds / world.timestep))
 
 
+def spawn_mjcf(world, name, text, **placement):
+    """Spawn an MJCF entity into a world and return its Model, or raise why not."""
+    return world.spawn(SpawnOrder(name, text, model_format='mjcf', **placement))
+
+
 def mjcf(body, *, sections=''):
     """Return MJCF text whose worldbody holds body, with more sections before it."""
     return f'<mujoco model="m">{sections}<worldbody>{body}</worldbody></mujoco>'
@@ -30,7 +36,7 @@ def mjcf(body, *, sections=''):
 
 def test_an_mjcf_crate_with_a_freejoint_falls_and_rests_on_the_ground():
     world = World()
-    crate = world.spawn_mjcf('crate', CRATE, position=(0.5, 0.0, 1.0))
+    crate = spawn_mjcf(world, 'crate', CRATE, position=(0.5, 0.0, 1.0))
     assert not crate.anchored
     assert world.get_model_state('crate').position.tolist() == [0.5, 0.0, 1.0]
     run(world, 0.2)
@@ -47,7 +53,7 @@ def test_an_mjcf_crate_with_a_freejoint_falls_and_rests_on_the_ground():
 
 def test_an_mjcf_arm_falls_rests_reports_its_joint_and_its_own_actuator_turns_it():
     world = World()
-    arm = world.spawn_mjcf('arm', ARM, position=(0.0, 1.0, 0.0))
+    arm = spawn_mjcf(world, 'arm', ARM, position=(0.0, 1.0, 0.0))
     description = arm.description
     assert (description.joints, description.actuators) == (('shoulder',), ('shoulder_servo',))
     assert [type(plugin) for plugin in arm.plugins] == [JointStatePublisher]
@@ -73,11 +79,11 @@ def test_an_mjcf_arm_falls_rests_reports_its_joint_and_its_own_actuator_turns_it
 
 def test_an_mjcf_body_without_joints_is_welded_to_the_world_and_things_rest_on_it():
     world = World()
-    pillar = world.spawn_mjcf('pillar', mjcf(
+    pillar = spawn_mjcf(world, 'pillar', mjcf(
         '<body name="pillar"><geom type="cylinder" size="0.2 0.5"/></body>'),
         position=(0.0, 0.0, 0.5))
     assert pillar.anchored and not pillar.plugins
-    world.spawn_mjcf('crate', CRATE, position=(0.0, 0.0, 1.5))
+    spawn_mjcf(world, 'crate', CRATE, position=(0.0, 0.0, 1.5))
     run(world, 2.0)
     assert world.get_model_state('pillar').position.tolist() == [0.0, 0.0, 0.5]
     assert world.get_model_state('crate').position == pytest.approx([0.0, 0.0, 1.1], abs=1e-3)
@@ -85,7 +91,7 @@ def test_an_mjcf_body_without_joints_is_welded_to_the_world_and_things_rest_on_i
 
 def test_an_mjcf_pendulum_hinged_to_the_world_swings_where_it_was_spawned():
     world = World()
-    pendulum = world.spawn_mjcf('pendulum', mjcf(
+    pendulum = spawn_mjcf(world, 'pendulum', mjcf(
         '<body><joint axis="0 1 0" damping="0.05"/>'
         '<geom type="capsule" fromto="0 0 0 0.3 0 0" size="0.02" mass="0.2"/></body>'),
         position=(0.0, 0.0, 1.0))
@@ -107,8 +113,8 @@ def test_an_mjcf_entity_spawned_and_deleted_leaves_tinybot_its_state_and_no_trac
     run(world, 0.5)
     for _ in range(2):
         kept = tinybot.saved_state(world.data)
-        world.spawn_mjcf('arm', ARM)
-        world.spawn_mjcf('crate', CRATE, position=(0.0, 1.0, 1.0))
+        spawn_mjcf(world, 'arm', ARM)
+        spawn_mjcf(world, 'crate', CRATE, position=(0.0, 1.0, 1.0))
         for field, values in tinybot.saved_state(world.data).items():
             assert np.array_equal(values, kept[field]), field
         run(world, 0.5)
@@ -122,7 +128,7 @@ def test_an_mjcf_entity_spawned_and_deleted_leaves_tinybot_its_state_and_no_trac
 
 def test_the_world_keeps_its_own_physics_whatever_an_mjcf_option_says():
     world = World()
-    crate = world.spawn_mjcf('crate', CRATE.replace(
+    crate = spawn_mjcf(world, 'crate', CRATE.replace(
         '<worldbody>', '<option timestep="0.05" gravity="0 0 5"/><size memory="1M"/>'
         '<worldbody>'), position=(0.0, 0.0, 1.0))
     assert world.model.opt.timestep == 0.002
@@ -141,7 +147,7 @@ def test_mesh_files_are_read_from_the_mjcf_folder_and_nowhere_else(tmp_path):
     text = mjcf('<body><freejoint/><geom type="mesh" mesh="box" mass="1"/></body>',
                 sections='<compiler meshdir="meshes"/><asset><mesh file="box.obj"/></asset>')
     world = World()
-    model = world.spawn_mjcf('boxy', text, base_dir=str(folder), position=(0.0, 0.0, 1.0))
+    model = spawn_mjcf(world, 'boxy', text, base_dir=str(folder), position=(0.0, 0.0, 1.0))
     assert model.description.mesh_files == (str(folder / 'meshes' / 'box.obj'),)
     run(world, 1.5)
     # The mesh is 0.1 x 0.06 x 0.04 m: the box rests 0.02 m up.
@@ -153,8 +159,8 @@ def test_mesh_files_are_read_from_the_mjcf_folder_and_nowhere_else(tmp_path):
             (str(tmp_path / 'secret.obj'), False, 'lies outside'),
             ('gone.obj', True, 'is not there')]:
         with pytest.raises(AssetError, match=message) as refusal:
-            world.spawn_mjcf('intruder', text.replace('box.obj', filename),
-                             base_dir=str(folder))
+            spawn_mjcf(world, 'intruder', text.replace('box.obj', filename),
+                       base_dir=str(folder))
         assert refusal.value.missing is missing
     assert contents(world) == before
 
@@ -210,7 +216,7 @@ def test_hostile_mjcf_is_refused_naming_the_value_and_changes_nothing(what, text
     run(world, 0.2)
     before, kept = contents(world), world.models['tinybot'].saved_state(world.data)
     with pytest.raises(refusal, match=message.replace('(', r'\(').replace(')', r'\)')):
-        world.spawn_mjcf('intruder', text)
+        spawn_mjcf(world, 'intruder', text)
     assert contents(world) == before
     for field, values in world.models['tinybot'].saved_state(world.data).items():
         assert np.array_equal(values, kept[field]), field

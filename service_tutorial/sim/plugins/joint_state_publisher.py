@@ -9,17 +9,14 @@ drive's joint states; a block's <update_rate> is not read.
 """
 
 from dataclasses import dataclass
-import types
 
 import numpy as np
 from service_tutorial.sim.description import UrdfError
 from service_tutorial.sim.plugins import Plugin
-from service_tutorial.sim.urdf.gazebo import PluginBlock
 from service_tutorial.sim.validation import quoted
 
-# Its kind in plugins.KINDS, and the <plugin filename> an MJCF model's block is given.
+# Its kind in plugins.KINDS.
 JOINT_STATE_PUBLISHER = 'gazebo_ros_joint_state_publisher'
-MJCF_FILENAME = 'libgazebo_ros_joint_state_publisher.so'
 
 
 @dataclass(frozen=True)
@@ -27,12 +24,6 @@ class JointStateConfig:
     """The joints whose states are published, by their names in the robot file."""
 
     joint_names: tuple
-
-
-def mjcf_block():
-    """Return the plugin block an MJCF model's joint state publisher stands for."""
-    return PluginBlock(filename=MJCF_FILENAME, name='joint_state_publisher',
-                       parameters=types.MappingProxyType({}))
 
 
 class JointStatePublisher(Plugin):
