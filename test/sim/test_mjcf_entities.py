@@ -236,3 +236,23 @@ def test_a_urdf_joint_state_publisher_block_names_the_joints_it_publishes():
                                                'moving joint of the robot'):
         world.spawn_urdf('other', read_file(TINYBOT).replace('</robot>', block.replace(
             'wheel_right_joint', 'caster_joint')), position=(2.0, 0.0, 0.0))
+
+
+def test_a_batch_mixing_mjcf_and_urdf_spawns_with_one_recompile_and_comes_to_rest():
+    # Seven orders go into the world's spec in groups (attachment.GROUP_SIZE), each group
+    # attached to a spec of its own first: the arms' degrees still come out as radians.
+    world = World()
+    orders = [SpawnOrder('tinybot', read_file(TINYBOT), position=(0.0, -2.0, 0.0))]
+    for index in range(3):
+        orders += [SpawnOrder(f'arm{index}', ARM, position=(index, 0.0, 0.0),
+                              model_format='mjcf'),
+                   SpawnOrder(f'crate{index}', CRATE, position=(index, 2.0, 1.0),
+                              model_format='mjcf')]
+    outcomes = world.spawn_urdf_batch(orders)
+    assert [model.name for model in outcomes] == [order.name for order in orders]
+    run(world, 2.0)
+    for index in range(3):
+        shoulder = world.model.joint(f'arm{index}::shoulder')
+        assert shoulder.range == pytest.approx([-math.pi / 2, math.pi / 2])
+        assert world.get_model_state(f'arm{index}').position[2] == pytest.approx(0.05, abs=1e-3)
+        assert world.get_model_state(f'crate{index}').position[2] == pytest.approx(0.1, abs=1e-3)

@@ -13,9 +13,10 @@ import shutil
 import pytest
 from repository import MJCF_ARM, MJCF_CRATE, read_file, TEST_MODELS
 from sensor_msgs.msg import JointState
-from simulation_interfaces.msg import EntityCategory, Result, SpawnResult
+from simulation_interfaces.msg import EntityCategory, Resource, Result
+from simulation_interfaces.msg import SpawnEntity as SpawnRequest, SpawnResult
 from simulation_interfaces.srv import DeleteEntity, GetEntityBounds, GetEntityInfo
-from simulation_interfaces.srv import GetSimulatorFeatures, StepSimulation
+from simulation_interfaces.srv import GetSimulatorFeatures, SpawnEntities, StepSimulation
 from standard_entities import close, entity_state, position_of, snapshot, spawn
 from standard_entities import spawn_or_fail, stamped
 
@@ -170,3 +171,25 @@ def test_hostile_mjcf_gets_its_code_and_changes_nothing(world, mjcf_package):
         assert message in response.result.error_message, response.result.error_message
     assert snapshot(world) == before
     assert world.models() == ['tinybot', 'crate']
+
+
+def test_a_batch_spawns_mjcf_beside_urdf(world, mjcf_package):
+    requests = [
+        SpawnRequest(name='crate', entity_resource=Resource(resource_string=CRATE),
+                     initial_pose=stamped(2.0, 0.0, 1.0)),
+        SpawnRequest(entity_resource=Resource(uri='package://mjcf_pkg/arm.xml'),
+                     initial_pose=stamped(-2.0, 0.0, 0.0)),
+        SpawnRequest(name='r2d2', entity_resource=Resource(
+            uri='package://service_tutorial/models/r2d2.urdf'),
+            initial_pose=stamped(0.0, 2.0, 0.5)),
+        SpawnRequest(name='pair', entity_resource=Resource(
+            resource_string='<mujoco><worldbody><body/><body/></worldbody></mujoco>'))]
+    response = world.call(SpawnEntities, '/spawn_entities',
+                          SpawnEntities.Request(spawn_requests=requests))
+    assert response.result.result == SpawnEntities.Response.ENTITIES_SPAWN_FAILED
+    assert [result.result.result for result in response.results] == [
+        Result.RESULT_OK, Result.RESULT_OK, Result.RESULT_OK, SpawnResult.RESOURCE_PARSE_ERROR]
+    assert [result.entity_name for result in response.results] == ['crate', 'arm', 'r2d2', '']
+    step(world, 1000)
+    assert close(position_of(world, 'crate'), (2.0, 0.0, 0.1), 1e-3)
+    assert close(position_of(world, 'arm'), (-2.0, 0.0, 0.05), 1e-3)
