@@ -256,3 +256,21 @@ def test_a_batch_mixing_mjcf_and_urdf_spawns_with_one_recompile_and_comes_to_res
         assert shoulder.range == pytest.approx([-math.pi / 2, math.pi / 2])
         assert world.get_model_state(f'arm{index}').position[2] == pytest.approx(0.05, abs=1e-3)
         assert world.get_model_state(f'crate{index}').position[2] == pytest.approx(0.1, abs=1e-3)
+
+
+def test_mjcf_entities_go_back_to_their_spawn_pose_at_a_reset_and_step_without_warnings(caplog):
+    world = World()
+    arm = spawn_mjcf(world, 'arm', ARM, position=(0.0, 1.0, 0.0))
+    spawn_mjcf(world, 'crate', CRATE, position=(0.5, 0.0, 1.0))
+    spawn_mjcf(world, 'pillar', mjcf('<body><geom type="box" size="0.1 0.1 0.5"/></body>'),
+               position=(-1.0, 0.0, 0.5))
+    world.data.ctrl[arm.actuator_index] = 1.0
+    with caplog.at_level('WARNING', logger='service_tutorial.world'):
+        run(world, 2.0)
+        world.set_model_state('pillar', position=(-2.0, 0.0, 0.5), orientation=(1, 0, 0, 0))
+        world.reset_world()
+    assert not caplog.records, [record.getMessage() for record in caplog.records]
+    assert world.get_model_state('crate').position.tolist() == [0.5, 0.0, 1.0]
+    assert world.get_model_state('arm').position.tolist() == [0.0, 1.0, 0.3]
+    assert world.get_model_state('pillar').position.tolist() == [-1.0, 0.0, 0.5]
+    assert world.joint_state('arm')[1].tolist() == [0.0]
