@@ -40,6 +40,7 @@ from service_tutorial.sim.urdf.builder import RobotDescription
 from service_tutorial.sim.urdf.gazebo import PluginBlock
 from service_tutorial.sim.urdf.hardened_xml import MAX_MODEL_XML_BYTES
 from service_tutorial.sim.urdf.hardened_xml import parse_xml
+from service_tutorial.sim.urdf.meshes import MESH_EXTENSIONS
 from service_tutorial.sim.urdf.meshes import MeshMissing
 from service_tutorial.sim.urdf.meshes import read_mesh
 from service_tutorial.sim.urdf.meshes import share_holding
@@ -201,11 +202,9 @@ def _read_meshes(root, base_dir, package_resolver):
         path = _mesh_path(filename, folder, base_dir, package_resolver)
         try:
             decoded = read_mesh(path)
-        except MeshMissing as missing:
-            raise AssetError(f'MJCF mesh file {quoted(filename)} cannot be had: {missing}',
-                             missing=True) from None
-        except UrdfError as error:
-            raise AssetError(f'MJCF mesh file {quoted(filename)}: {error}') from None
+        except MeshMissing as reason:  # it is there (_mesh_path), but of no use
+            raise AssetError(f'MJCF mesh file {quoted(filename)} cannot be used: {reason}') \
+                from None
         name = mesh.get('name') or os.path.splitext(os.path.basename(filename))[0]
         mesh.set('name', name)
         meshes[name] = (path, decoded)
@@ -228,6 +227,9 @@ def _mesh_path(filename, folder, base_dir, package_resolver):
                          'its MJCF may read files from')
     if not os.path.isfile(path):
         raise AssetError(f'MJCF mesh file {shown} is not there ({quoted(path)})', missing=True)
+    if os.path.splitext(path)[1].lower() not in MESH_EXTENSIONS:
+        raise AssetError(f'MJCF mesh file {shown} has a format the world does not read; use '
+                         f'one of {", ".join(MESH_EXTENSIONS)}')
     return path
 
 

@@ -144,6 +144,8 @@ def test_mesh_files_are_read_from_the_mjcf_folder_and_nowhere_else(tmp_path):
     shutil.copy(BOX_OBJ, folder / 'meshes' / 'box.obj')
     shutil.copy(BOX_OBJ, tmp_path / 'secret.obj')
     os.symlink(tmp_path / 'secret.obj', folder / 'meshes' / 'link.obj')
+    (folder / 'meshes' / 'box.msh').write_bytes(b'\0' * 64)
+    (folder / 'meshes' / 'garbage.obj').write_text('v 1 2\nf 7 8 9\n')
     text = mjcf('<body><freejoint/><geom type="mesh" mesh="box" mass="1"/></body>',
                 sections='<compiler meshdir="meshes"/><asset><mesh file="box.obj"/></asset>')
     world = World()
@@ -157,7 +159,10 @@ def test_mesh_files_are_read_from_the_mjcf_folder_and_nowhere_else(tmp_path):
             ('../../secret.obj', False, 'lies outside'),
             ('link.obj', False, 'lies outside'),
             (str(tmp_path / 'secret.obj'), False, 'lies outside'),
-            ('gone.obj', True, 'is not there')]:
+            ('gone.obj', True, 'is not there'),
+            ('box.msh', False, 'has a format the world does not read; use one of .stl'),
+            ('garbage.obj', False, "MJCF mesh file 'garbage.obj' cannot be used: not a "
+                                   'readable OBJ file')]:
         with pytest.raises(AssetError, match=message) as refusal:
             spawn_mjcf(world, 'intruder', text.replace('box.obj', filename),
                        base_dir=str(folder))
