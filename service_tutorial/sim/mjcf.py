@@ -19,8 +19,8 @@ builtin textures and colours are not. Refused as well (DescriptionError): a worl
 body, with more than one, or with elements of its own; a top body in a <frame> or a mocap
 body; what the world would leave behind when the entity goes, or what acts beyond it
 (tendons, equality constraints, keyframes, contact pairs, flexes, skins, heightfields, engine
-plugins, custom data, a skybox); shapes larger than MAX_SIZE; MJCF that MuJoCo does not
-compile.
+plugins, custom data, a skybox); <replicate>; builtin textures over MAX_TEXTURE_SIDE pixels
+a side; shapes larger than MAX_SIZE; MJCF that MuJoCo does not compile.
 
 The world's physics stays the world's: <option>, <size>, <visual> and <statistic> are ignored,
 each with a note, rather than changing the timestep or gravity for every model.
@@ -54,8 +54,11 @@ WORLD_SECTIONS = ('option', 'size', 'visual', 'statistic')
 # Of <asset> and <contact>, the children an entity may have.
 ASSETS = ('mesh', 'material', 'texture')
 CONTACTS = ('exclude',)
-# Elements refused wherever they stand: they bring what the world could not take away again.
-REFUSED_ANYWHERE = ('plugin', 'flexcomp', 'composite', 'attach', 'skin', 'flex')
+# Elements refused wherever they stand: they bring what the world could not take away again,
+# or (replicate) multiply a few lines into as many bodies as they like.
+REFUSED_ANYWHERE = ('plugin', 'flexcomp', 'composite', 'attach', 'skin', 'flex', 'replicate')
+# The largest side of a builtin texture, in pixels: MuJoCo makes every pixel at compile time.
+MAX_TEXTURE_SIDE = 1024
 # Folder attributes of <compiler> that a mesh file is found by, in MuJoCo's order.
 MESH_FOLDERS = ('meshdir', 'assetdir')
 _HINGE_AND_SLIDE = (mujoco.mjtJoint.mjJNT_HINGE, mujoco.mjtJoint.mjJNT_SLIDE)
@@ -172,6 +175,12 @@ def _checked_sections(root):
         if texture.get('type') == 'skybox':
             raise DescriptionError(f'MJCF texture {quoted(texture.get("name") or "")} is a '
                                    "skybox, which would change the whole world's sky")
+        for side in ('width', 'height'):
+            text = texture.get(side, '0').strip()
+            if not text.isdigit() or int(text) > MAX_TEXTURE_SIDE:
+                raise DescriptionError(f'MJCF texture {quoted(texture.get("name") or "")} '
+                                       f'{side} must be a whole number of pixels up to '
+                                       f'{MAX_TEXTURE_SIDE}: {quoted(text)}')
         for attribute in texture.attrib:
             if attribute.startswith('file'):
                 raise AssetError(f'MJCF texture file {quoted(texture.get(attribute))} is not '

@@ -182,6 +182,14 @@ HOSTILE_MJCF = [
     ('a skybox', mjcf('<body/>', sections='<asset><texture name="sky" type="skybox" '
                                           'builtin="gradient" width="8" height="8"/></asset>'),
      DescriptionError, "MJCF texture 'sky' is a skybox, which would change the whole world's"),
+    ('a huge texture', mjcf('<body/>', sections='<asset><texture name="big" type="2d" '
+                                                'builtin="checker" width="100000" '
+                                                'height="100000"/></asset>'),
+     DescriptionError, "MJCF texture 'big' width must be a whole number of pixels up to 1024: "
+                       "'100000'"),
+    ('a replicate', mjcf('<body><replicate count="1000000" offset="1 0 0"><geom size="1"/>'
+                         '</replicate></body>'), DescriptionError,
+     'MJCF element <replicate> is not supported'),
     ('two top bodies', mjcf('<body name="a"/><body name="b"/>'), DescriptionError,
      "MJCF worldbody holds 2 top-level bodies ('a', 'b'); an entity is one tree"),
     ('no body', mjcf(''), DescriptionError, 'MJCF worldbody holds no body'),
