@@ -40,7 +40,7 @@ XACRO_TAG = '{http://www.ros.org/wiki/xacro}'
 class RobotText:
     """A robot to spawn: its text, the folder its meshes resolve from, its own name, format."""
 
-    urdf: str  # URDF, or MJCF if format is 'mjcf'
+    urdf: str  # URDF, or MJCF if model_format is 'mjcf'
     base_dir: str  # None for a resource_string
     robot_name: str  # the name of its <robot>, or the model of its <mujoco>; '' if none
     model_format: str = 'urdf'  # 'urdf' or 'mjcf'
