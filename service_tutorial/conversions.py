@@ -31,6 +31,16 @@ def fill_time_msg(msg, seconds):
     return msg
 
 
+def fill_joint_state_msg(msg, seconds, joint_state):
+    """Fill a sensor_msgs/JointState with (names, positions, velocities) at simulation seconds."""
+    names, positions, velocities = joint_state
+    fill_time_msg(msg.header.stamp, seconds)
+    msg.name = names
+    msg.position = positions.tolist()
+    msg.velocity = velocities.tolist()
+    return msg
+
+
 def seconds_of(stamp):
     """Convert a builtin_interfaces/Time to seconds."""
     return stamp.sec + stamp.nanosec * 1e-9

@@ -12,6 +12,9 @@ LESSON_ROBOTS = os.path.join(os.path.dirname(ROOT), 'shared', 'lesson', 'robots'
 # The lesson's two robots.
 TINYBOT = os.path.join(MODELS, 'tinybot.urdf')
 R2D2 = os.path.join(MODELS, 'r2d2.urdf')
+# MJCF entities written for the tests: a free crate, and an arm with a hinge and its actuator.
+MJCF_CRATE = os.path.join(TEST_MODELS, 'mjcf', 'crate.xml')
+MJCF_ARM = os.path.join(TEST_MODELS, 'mjcf', 'arm.xml')
 
 
 def read_file(path):

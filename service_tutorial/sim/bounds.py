@@ -46,7 +46,9 @@ def collision_boxes(world, model):
     """Return the OrientedBoxes around the collision geoms of a world's model."""
     world.body_state(model.root_id)  # brings the world's kinematics up to date
     mj_model = world.model
-    geoms = np.flatnonzero((mj_model.geom_group == COLLISION_GROUP)
+    # A URDF's collision geoms are in COLLISION_GROUP; an MJCF's are any that collide.
+    collides = (mj_model.geom_contype | mj_model.geom_conaffinity) != 0
+    geoms = np.flatnonzero(((mj_model.geom_group == COLLISION_GROUP) | collides)
                            & (mj_model.body_rootid[mj_model.geom_bodyid] == model.root_id))
     return geom_boxes(mj_model, world.data, geoms)
 

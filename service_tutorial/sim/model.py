@@ -16,6 +16,12 @@ _PLACEMENTS = itertools.count(1)
 _JOINT_WIDTHS = {int(mujoco.mjtJoint.mjJNT_FREE): (7, 6), int(mujoco.mjtJoint.mjJNT_BALL): (4, 3)}
 
 
+def _offset(description):
+    """Tell whether a description's root stands anywhere but at its own origin."""
+    return (tuple(description.root_position) != (0.0, 0.0, 0.0)
+            or tuple(description.root_orientation) != (1.0, 0.0, 0.0, 0.0))
+
+
 class Model:
     """
     A spawned robot: its name, its URDF description, where it was spawned, and its plugins.
@@ -29,8 +35,9 @@ class Model:
         """Describe a model whose URDF frame goes to a world pose; it has no elements yet."""
         self.name = name
         self.description = description
-        if description.anchored:
-            # The root link sits where the URDF's joint to the world link puts it.
+        if description.anchored or _offset(description):
+            # The root link sits where the URDF's joint to the world link puts it, or the
+            # top body where its MJCF places it.
             position, orientation = frames.compose(position, orientation,
                                                    description.root_position,
                                                    description.root_orientation)

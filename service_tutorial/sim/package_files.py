@@ -20,55 +20,56 @@ class PackageFileError(ValueError):
     """A uri that names nothing a request may read; the message names the uri and why."""
 
 
-def confined_path(uri, package_share, *, folder=False):
+def confined_path(uri, package_share, *, folder=False, what='uri'):
     """
     Return the real path of the file (or folder) a uri names inside a package's share.
 
-    package_share maps a package name to its share folder (ament's get_package_share_directory).
+    package_share maps a package name to its share folder (ament's get_package_share_directory);
+    what names the uri in the messages.
     Raise PackageFileError if the uri is malformed, leaves the share or names nothing.
     """
     shown = quoted(uri)
     if len(uri) > MAX_URI_LENGTH:
-        raise PackageFileError(f'uri {shown} is longer than {MAX_URI_LENGTH} characters')
+        raise PackageFileError(f'{what} {shown} is longer than {MAX_URI_LENGTH} characters')
     scheme, separator, rest = uri.partition('://')
     if not separator or scheme not in ('package', 'file'):
-        raise PackageFileError(f'uri {shown} is neither package://<package>/<path> nor '
+        raise PackageFileError(f'{what} {shown} is neither package://<package>/<path> nor '
                                'file://<absolute path>')
     if '..' in rest.split('/') or '\0' in rest:
-        raise PackageFileError(f"uri {shown} must not contain '..'")
+        raise PackageFileError(f"{what} {shown} must not contain '..'")
     if scheme == 'package':
         package, _, relative = rest.partition('/')
-        share = package_share_of(package, package_share, shown)
+        share = package_share_of(package, package_share, f'{what} {shown}')
         candidate = os.path.join(share, relative)
     else:
         if not rest.startswith('/'):
-            raise PackageFileError(f'uri {shown} is not an absolute path')
+            raise PackageFileError(f'{what} {shown} is not an absolute path')
         candidate = os.path.normpath(rest)
         share = share_holding(candidate, package_share)
         if share is None:
-            raise PackageFileError(f'uri {shown} lies outside the share folders of the '
+            raise PackageFileError(f'{what} {shown} lies outside the share folders of the '
                                    'installed packages')
     path = os.path.realpath(candidate)
     if not within(path, share):
-        raise PackageFileError(f'uri {shown} leads outside the share folder of its package')
+        raise PackageFileError(f'{what} {shown} leads outside the share folder of its package')
     if folder and not os.path.isdir(path):
-        raise PackageFileError(f'uri {shown} names no folder')
+        raise PackageFileError(f'{what} {shown} names no folder')
     if not folder and not os.path.isfile(path):
-        raise PackageFileError(f'uri {shown} names no file')
+        raise PackageFileError(f'{what} {shown} names no file')
     return path
 
 
-def package_share_of(package, package_share, shown):
-    """Return the real share folder of a package, or refuse the uri (shown) that names it."""
+def package_share_of(package, package_share, named):
+    """Return the real share folder of a package, or refuse the uri (named) that names it."""
     if not package or not all(character.isalnum() or character == '_'
                               for character in package):
-        raise PackageFileError(f'uri {shown} names no valid package')
+        raise PackageFileError(f'{named} names no valid package')
     try:
         share = package_share(package)
     except Exception:  # ament's PackageNotFoundError, or a resolver's own error
         share = None
     if not share or not os.path.isdir(share):
-        raise PackageFileError(f'uri {shown}: package {quoted(package)} is not installed')
+        raise PackageFileError(f'{named}: package {quoted(package)} is not installed')
     return os.path.realpath(share)
 
 

@@ -1,6 +1,8 @@
 """
 Spawn orders: a robot to spawn, checked and built into a Model before anything is attached.
 
+An order's robot is URDF or, with format 'mjcf', MJCF; both go the same way from here on.
+
 A world spawns a batch of orders with one recompile; each order is checked on its own first, so
 that a refused order changes nothing and leaves the others to spawn.
 """
@@ -18,17 +20,20 @@ from service_tutorial.sim.validation import DescriptionError
 from service_tutorial.sim.validation import quoted
 from service_tutorial.sim.validation import WorldError
 
+FORMATS = ('urdf', 'mjcf')
+
 
 @dataclass(frozen=True)
 class SpawnOrder:
-    """One robot to spawn: its name, its URDF, its pose in a reference frame, its mesh folder."""
+    """One robot to spawn: its name, its URDF or MJCF, its pose in a frame, its mesh folder."""
 
     name: str
-    urdf_xml: object  # URDF text, str or bytes
+    urdf_xml: object  # the robot's text, str or bytes: URDF, or MJCF by model_format
     position: tuple = (0.0, 0.0, 0.0)
     orientation: tuple = frames.IDENTITY_QUATERNION  # (w, x, y, z)
     reference_frame: str = ''  # '' or 'world', a model, 'model::link', or a model of the batch
     base_dir: str = None  # where mesh paths relative to the URDF resolve
+    model_format: str = 'urdf'  # 'urdf' or 'mjcf' (sim/mjcf.py)
 
 
 def prepared_batch(orders, *, taken, frame_state, descriptions):
@@ -56,8 +61,11 @@ def prepared_model(order, *, taken, batch, frame_state, descriptions):
 
     taken: the names in the world; batch: the models of the same batch prepared so far, by
     name (an order may stand relative to one of them); frame_state: the world's ModelState of
-    a reference frame; descriptions: what loads the URDF's description (a DescriptionCache).
+    a reference frame; descriptions: what loads the robot's description (a DescriptionCache).
     """
+    if order.model_format not in FORMATS:
+        raise WorldError(f'format {quoted(str(order.model_format))} is none of '
+                         f'{", ".join(FORMATS)}')
     validation.check_model_name(order.name)
     if order.name in taken or order.name in batch:
         raise WorldError(f'a model named {quoted(order.name)} already exists')
@@ -72,7 +80,7 @@ def prepared_model(order, *, taken, batch, frame_state, descriptions):
     world_position, world_orientation = frames.compose(
         frame_position, frame_orientation, position, orientation)
     try:
-        description = descriptions.load(order.urdf_xml, order.base_dir)
+        description = descriptions.load(order.urdf_xml, order.base_dir, order.model_format)
     except UrdfError as error:
         raise DescriptionError(str(error)) from None
     return Model(order.name, description, world_position, world_orientation)

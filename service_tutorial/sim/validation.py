@@ -23,6 +23,15 @@ class DescriptionError(WorldError):
     """A robot description the world refuses: it does not parse, or MuJoCo will not build it."""
 
 
+class AssetError(DescriptionError):
+    """A description refused for a file it names: missing, or one it may not have read."""
+
+    def __init__(self, message, *, missing=False):
+        """Refuse with message; missing: the file is allowed but cannot be had."""
+        super().__init__(message)
+        self.missing = missing
+
+
 def quoted(text):
     """Return user text in quotes for a message: control characters escaped, long text cut."""
     shown = text[:MAX_QUOTED_LENGTH]

@@ -49,7 +49,7 @@ def _route_mujoco_messages():
 
 class World:
     """
-    A MuJoCo world with a ground plane into which URDF robots are spawned and deleted.
+    A MuJoCo world with a ground plane into which URDF and MJCF robots are spawned and deleted.
 
     rebuild(), forward(), state_changed(), schedule_events(), schedule_event() and
     body_state() are there for the core's own pieces, recovery and plugins; nodes use the rest.
@@ -145,14 +145,18 @@ class World:
 
         placement: position, orientation, reference_frame and base_dir, as in a SpawnOrder.
         """
-        outcome, = self.spawn_urdf_batch([SpawnOrder(name, urdf_xml, **placement)])
+        return self.spawn(SpawnOrder(name, urdf_xml, **placement))
+
+    def spawn(self, order):
+        """Add the robot of a SpawnOrder, URDF or MJCF (sim/mjcf.py); return its Model or raise."""
+        outcome, = self.spawn_urdf_batch([order])
         if isinstance(outcome, WorldError):
             raise outcome
         return outcome
 
     def spawn_urdf_batch(self, orders):
         """
-        Add the robots of several SpawnOrders with one recompile; log their notes.
+        Add the robots of several SpawnOrders, URDF or MJCF, with one recompile; log their notes.
 
         Return a Model or the WorldError that refused it, for each order in order. A refused
         order changes nothing and leaves the others to spawn. Should the batch not compile or
@@ -221,9 +225,8 @@ class World:
         _logger.info("deleted model '%s'", name)
 
     def load(self, scenery):
-        """Take a new scenery (a Scenery or None) with no models, at time 0 and paused."""
+        """Take a new scenery (a Scenery or None) with no models, at time 0."""
         self._scene = dataclasses.replace(self._scene, scenery=scenery)
-        self._paused = True
         self.rebuild({})
         self._reset(keep_time=False)
 
@@ -299,6 +302,12 @@ class World:
                 self._update_plugins()
         self._kinematics_fresh = False
         return count
+
+    def set_cmd_vel_timeout(self, seconds):
+        """Let drive commands lapse after seconds (0: never), those in force as well."""
+        self._cmd_vel_timeout = validation.non_negative_number(seconds, 'cmd_vel_timeout')
+        plugins.set_command_timeout(self._models.values(), self._cmd_vel_timeout)
+        self.schedule_events()
 
     def schedule_events(self):
         """Work out when a plugin next needs its update()."""
@@ -388,11 +397,3 @@ class World:
     def joint_state(self, name):
         """Return (URDF joint names, positions, velocities) of a model's moving joints."""
         return self._spawned(name).joint_state(self._data)
-
-    # ---------------------------------------------------------------- drives
-
-    def set_cmd_vel_timeout(self, seconds):
-        """Let drive commands lapse after seconds (0: never), those in force as well."""
-        self._cmd_vel_timeout = validation.non_negative_number(seconds, 'cmd_vel_timeout')
-        plugins.set_command_timeout(self._models.values(), self._cmd_vel_timeout)
-        self.schedule_events()

@@ -109,7 +109,7 @@ def read_world_file(path, package_share, *, shown=None):
                        default_name=default_name)
 
 
-def parse_world(data, what, base_dir, package_share, *, default_name=''):
+def parse_world(data, what, base_dir, package_share, *, default_name='world'):
     """Return the WorldFile of a world's XML (bytes); base_dir None: it names files by uri."""
     if isinstance(data, str):
         data = data.encode('utf-8')

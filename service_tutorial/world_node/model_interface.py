@@ -25,7 +25,11 @@ class ModelInterface:
     """One model's namespace, the faces of its plugins and its robot_description."""
 
     def __init__(self, node, world, model, namespace, urdf):
-        """Name a model's topics (namespace normalised: '' or '/a/b'); make_topics() makes them."""
+        """
+        Name a model's topics (namespace normalised: '' or '/a/b'); make_topics() makes them.
+
+        urdf: the text robot_description carries; None (an MJCF model) for none.
+        """
         self.model_name = model.name
         self.namespace = namespace
         self.topics_made = False
@@ -36,7 +40,7 @@ class ModelInterface:
                 for plugin in model.plugins:
                     if kind.applies_to(plugin):
                         self.faces.append(kind(node, world, model, plugin, namespace))
-            if self.faces:  # for robot_state_publisher and RViz
+            if self.faces and urdf is not None:  # for robot_state_publisher and RViz
                 self.description = RobotDescriptionPublisher(node, namespace, urdf)
             for part in self._parts():
                 for topic in part.topics:

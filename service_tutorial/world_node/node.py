@@ -78,6 +78,11 @@ def left_out_of(description):
     return '; '.join(parts)
 
 
+def robot_description(order):
+    """Return the URDF a spawned model's robot_description carries; MJCF carries none."""
+    return order.urdf_xml if order.model_format == 'urdf' else None
+
+
 class MujocoWorld(Node):
     """Serves a MuJoCo world the way gazebo_ros serves Gazebo's."""
 
@@ -310,7 +315,7 @@ class MujocoWorld(Node):
         for index, (order, namespace) in enumerate(zip(orders, namespaces)):
             if not isinstance(outcomes[index], WorldError):
                 try:
-                    self._give_interface(outcomes[index], namespace, order.urdf_xml)
+                    self._give_interface(outcomes[index], namespace, robot_description(order))
                     outcomes[index] = left_out_of(outcomes[index].description)
                 except Exception as error:  # the model is gone again; the others go on
                     outcomes[index] = error

@@ -73,7 +73,7 @@ def test_sources_keep_to_the_installed_shares(share, tmp_path):
         'pkg', shares['pkg'], os.path.join(shares['pkg'], 'urdf', 'a'))
     assert source_folder(f'file://{share}/urdf', shares)[2] == os.path.join(shares['pkg'], 'urdf')
     for source, reason in [
-            ('/etc', 'is neither package://<package>/<folder> nor file://<absolute folder>'),
+            ('/etc', 'is neither package://<package>/<path> nor file://<absolute path>'),
             ('https://example.com/pkg', 'is neither'),
             ('file:///etc', 'lies outside the share folders of the installed packages'),
             (f'file://{tmp_path}/outside', 'lies outside the share folders'),

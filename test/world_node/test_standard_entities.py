@@ -118,10 +118,11 @@ SPAWN_REFUSALS = [
      'characters) is longer than 64 characters'),
     ({'resource_string': '<sdf version="1.9"><model name="m"/></sdf>'},
      SpawnResult.UNSUPPORTED_FORMAT,
-     'SpawnEntity: resource_string is SDF (root element <sdf>); this world spawns urdf'),
+     'SpawnEntity: resource_string is SDF (root element <sdf>); this world spawns urdf and '
+     'mjcf'),
     ({'uri': 'package://service_tutorial/package.xml'}, SpawnResult.UNSUPPORTED_FORMAT,
-     "SpawnEntity: uri 'package://service_tutorial/package.xml' is MJCF; this world spawns "
-     'urdf'),
+     "SpawnEntity: uri 'package://service_tutorial/package.xml' is neither URDF nor MJCF: "
+     'root element is <package>'),
     ({}, SpawnResult.NO_RESOURCE, 'SpawnEntity: neither uri nor resource_string is given'),
     ({'uri': 'http://example.com/r2d2.urdf'}, SpawnResult.NO_RESOURCE,
      "SpawnEntity: uri 'http://example.com/r2d2.urdf' is neither package://<package>/<path> "

@@ -183,7 +183,7 @@ def test_hostile_sources_are_named_and_nothing_outside_the_roots_is_read(ros, my
     (share / 'urdf' / 'escape.urdf').symlink_to(outside / 'secret.urdf')
     (share / 'urdf' / 'linked_folder').symlink_to(outside)  # a folder link: never followed
     refused = [
-        ('/etc', "source '/etc' is neither package://<package>/<folder> nor file://"),
+        ('/etc', "source '/etc' is neither package://<package>/<path> nor file://"),
         ('file:///etc', "source 'file:///etc' lies outside the share folders"),
         (f'file://{outside}', 'lies outside the share folders'),
         ('file:///tmp/../etc', "source 'file:///tmp/../etc' must not contain '..'"),

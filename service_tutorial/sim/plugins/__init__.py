@@ -23,6 +23,7 @@ KINDS = {
     'gazebo_ros_camera': 'service_tutorial.sim.plugins.camera_sensor',
     'gazebo_ros_imu_sensor': 'service_tutorial.sim.plugins.imu_sensor',
     'gazebo_ros_imu': 'service_tutorial.sim.plugins.imu_sensor',
+    'gazebo_ros_joint_state_publisher': 'service_tutorial.sim.plugins.joint_state_publisher',
 }
 
 

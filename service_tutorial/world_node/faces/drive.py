@@ -10,7 +10,8 @@ from geometry_msgs.msg import Twist
 from nav_msgs.msg import Odometry
 from rclpy.event_handler import PublisherEventCallbacks, SubscriptionEventCallbacks
 from sensor_msgs.msg import JointState
-from service_tutorial.conversions import fill_pose_msg, fill_time_msg, fill_twist_msg
+from service_tutorial.conversions import fill_joint_state_msg, fill_pose_msg
+from service_tutorial.conversions import fill_time_msg, fill_twist_msg
 from service_tutorial.sim.plugins.diff_drive import DiffDrive, MAX_WHEEL_RIM_SPEED
 from service_tutorial.sim.plugins.drive_config import is_ros1_block
 from service_tutorial.sim.plugins.drive_config import ODOMETRY_SOURCE_ENCODER
@@ -124,13 +125,8 @@ class DriveFace(PluginFace):
 
     def publish_joint_states(self, now):
         """Publish the positions and velocities of the robot's moving joints."""
-        names, positions, velocities = self.world.joint_state(self.model.name)
-        msg = self.joint_states_msg
-        fill_time_msg(msg.header.stamp, now)
-        msg.name = names
-        msg.position = positions.tolist()
-        msg.velocity = velocities.tolist()
-        self.joint_states_pub.publish(msg)
+        self.joint_states_pub.publish(fill_joint_state_msg(
+            self.joint_states_msg, now, self.world.joint_state(self.model.name)))
 
     def take_commands(self):
         """Hand the cmd_vel messages that came since the last tick to the drive, in order."""

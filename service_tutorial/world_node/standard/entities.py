@@ -12,7 +12,7 @@ from ament_index_python.packages import get_package_share_directory
 from service_tutorial.conversions import pose_from_msg, twist_from_msg
 from service_tutorial.sim import frames
 from service_tutorial.sim import validation
-from service_tutorial.sim.validation import DescriptionError, quoted, WorldError
+from service_tutorial.sim.validation import AssetError, DescriptionError, quoted, WorldError
 from service_tutorial.world_node.standard.entity_filters import EntityFilter
 from service_tutorial.world_node.standard.entity_messages import CATEGORIES, entity_info
 from service_tutorial.world_node.standard.entity_messages import EntityStates
@@ -45,7 +45,7 @@ class EntityServices:
         SimulatorFeatures.SPAWNING_RESOURCE_STRING, SimulatorFeatures.ENTITY_STATE_GETTING,
         SimulatorFeatures.ENTITY_STATE_SETTING, SimulatorFeatures.ENTITY_INFO_GETTING,
         SimulatorFeatures.ENTITY_INFO_SETTING, SimulatorFeatures.SPAWNING_ENTITIES)
-    SPAWN_FORMATS = ('urdf',)
+    SPAWN_FORMATS = ('urdf', 'mjcf')
 
     def __init__(self, node, package_share=get_package_share_directory):
         """Serve node's world under names relative to node's namespace (/spawn_entity...)."""
@@ -231,6 +231,9 @@ class EntityServices:
 
 def _spawned(outcome):
     """Return what the world left out of a spawned entity, or raise why it was refused."""
+    if isinstance(outcome, AssetError):
+        raise Refusal(SpawnResult.MISSING_ASSETS if outcome.missing
+                      else SpawnResult.UNSUPPORTED_ASSETS, str(outcome))
     if isinstance(outcome, DescriptionError):
         raise Refusal(SpawnResult.RESOURCE_PARSE_ERROR, str(outcome))
     if isinstance(outcome, Exception):

@@ -16,7 +16,8 @@ CATEGORIES = {
 
 def default_category(model):
     """Return what a model is until a client says otherwise: robot, static object or object."""
-    if model.plugins:  # a drive or sensors
+    # A drive or sensors, joint states (an MJCF's hinges and slides), or actuators of its own.
+    if model.plugins or model.description.actuators:
         return EntityCategory.CATEGORY_ROBOT
     if model.anchored:
         return EntityCategory.CATEGORY_STATIC_OBJECT

@@ -3,9 +3,10 @@ A standard spawn request (SpawnEntity) checked field by field and made into a Sp
 
 Each field that is wrong is refused with the standard's own code and a message naming the
 value: the name (101 taken, 102 invalid), the format and the resource (103, 104, 106), the
-namespace (105) and the initial pose (109, an unknown frame too). With allow_renaming, a taken
-or missing name becomes a new one: the name asked for, or else the robot's own name, or
-'entity', with the first free '_<n>' after it.
+namespace (105) and the initial pose (109, an unknown frame too). The world refuses what it
+cannot build (106), and an MJCF's files it may not read (108) or cannot find (107). With
+allow_renaming, a taken or missing name becomes a new one: the name asked for, or else the
+robot's own name, or 'entity', with the first free '_<n>' after it.
 """
 
 from dataclasses import dataclass
@@ -40,7 +41,7 @@ class SpawnPlanner:
         self._world = world
         self._package_share = package_share
         self._taken = set(world.models)
-        # (uri, resource_string) -> RobotText: a fleet's URDF is read and parsed once a call.
+        # (uri, resource_string) -> RobotText: a fleet's text is read and parsed once a call.
         self._robots = {}
 
     def plan(self, *, name, allow_renaming, uri, resource_string, entity_namespace,
@@ -56,7 +57,8 @@ class SpawnPlanner:
         self._taken.add(final_name)
         return PlannedSpawn(order=SpawnOrder(
             final_name, robot.urdf, position=position, orientation=orientation,
-            reference_frame=initial_pose.header.frame_id, base_dir=robot.base_dir),
+            reference_frame=initial_pose.header.frame_id, base_dir=robot.base_dir,
+            model_format=robot.model_format),
             namespace=namespace)
 
     def _robot(self, uri, resource_string):

@@ -28,6 +28,7 @@ from service_tutorial.robot_files import expand_xacro, file_model_name, is_xacro
 from service_tutorial.robot_files import RobotFileError
 from service_tutorial.sim import bounds
 from service_tutorial.sim.description import UrdfError
+from service_tutorial.sim.package_files import confined_path, PackageFileError, within
 from service_tutorial.sim.urdf.builder import load_urdf
 from service_tutorial.sim.urdf.hardened_xml import MAX_MODEL_XML_BYTES, parse_xml
 from service_tutorial.sim.validation import quoted
@@ -36,7 +37,6 @@ ROBOT_FOLDERS = ('urdf', 'models', 'mjcf')
 URDF_EXTENSIONS = ('.urdf', '.xacro')
 MJCF_EXTENSIONS = ('.xml', '.mjcf')
 MAX_DEPTH = 3  # folders below a robot folder or a source
-MAX_SOURCE_LENGTH = 4096
 MAX_SOURCES = 32
 MAX_FILES = 500  # robot files one call reads or takes from the cache
 MAX_ENTRIES = 20000  # folder entries one call looks at
@@ -86,57 +86,21 @@ def source_folder(source, shares):
     """
     Return (package, real share, real folder) of a source, or raise SourceRefused.
 
-    shares: {package: real share folder} of the installed packages.
+    shares: {package: real share folder} of the installed packages. A source is refused by the
+    rules of a spawn uri (sim/package_files.py).
     """
-    shown = quoted(source)
-    if len(source) > MAX_SOURCE_LENGTH:
-        raise SourceRefused(f'source {shown} is longer than {MAX_SOURCE_LENGTH} characters')
-    scheme, separator, rest = source.partition('://')
-    if not separator or scheme not in ('package', 'file'):
-        raise SourceRefused(f'source {shown} is neither package://<package>/<folder> nor '
-                            'file://<absolute folder>')
-    if '..' in rest.split('/') or '\0' in rest:
-        raise SourceRefused(f"source {shown} must not contain '..'")
-    if scheme == 'package':
-        package, _, relative = rest.partition('/')
-        if package not in shares:
-            raise SourceRefused(f'source {shown}: package {quoted(package)} is not installed')
-        share = shares[package]
-        candidate = os.path.join(share, relative)
-    else:
-        if not rest.startswith('/'):
-            raise SourceRefused(f'source {shown} is not an absolute path')
-        candidate = os.path.normpath(rest)
-        package, share = _share_holding(candidate, shares)
-        if share is None:
-            raise SourceRefused(f'source {shown} lies outside the share folders of the '
-                                'installed packages')
-    folder = os.path.realpath(candidate)
-    if not _within(folder, share):
-        raise SourceRefused(f'source {shown} leads outside the share folder of its package')
-    if not os.path.isdir(folder):
-        raise SourceRefused(f'source {shown} names no folder')
+    try:
+        folder = confined_path(source, shares.get, folder=True, what='source')
+    except PackageFileError as error:
+        raise SourceRefused(str(error)) from None
+    package, share = max(((package, share) for package, share in shares.items()
+                          if within(folder, share)), key=lambda held: len(held[1]))
     return package, share, folder
-
-
-def _share_holding(path, shares):
-    """Return (package, share) of the share a path is written under (.../share/<pkg>/...)."""
-    parts = path.split(os.sep)
-    for index in range(len(parts) - 1):
-        package = parts[index + 1]
-        if parts[index] == 'share' and package in shares and os.path.realpath(
-                os.sep.join(parts[:index + 2])) == shares[package]:
-            return package, shares[package]
-    return None, None
 
 
 def _valid_package(package):
     return bool(package) and all(character.isalnum() or character == '_'
                                  for character in package)
-
-
-def _within(path, root):
-    return path == root or path.startswith(root.rstrip(os.sep) + os.sep)
 
 
 class FileWalk:
@@ -191,7 +155,7 @@ class FileWalk:
         if uri in self.found or uri in self.links_out:
             return
         path = os.path.realpath(entry.path)
-        if not _within(path, share):
+        if not within(path, share):
             self.links_out.append(uri)
         elif not os.path.isfile(path):
             return
@@ -313,7 +277,7 @@ def _check_mjcf_files(root, folder, share, uri, seen):
     for element, attribute, value in named:
         for base in bases:
             target = os.path.realpath(os.path.join(base, value))
-            if not _within(target, share):
+            if not within(target, share):
                 raise ValueError(f'it names file {quoted(value)}, which leads outside the share '
                                  'folder of its package')
         if element.tag == 'include' and attribute == 'file':

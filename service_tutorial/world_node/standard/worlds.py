@@ -212,9 +212,10 @@ class WorldServices:
         folders = []
         for source in sources:
             try:
-                folders.append((confined_path(source, self.package_share, folder=True), None))
+                folders.append((confined_path(source, self.package_share, folder=True,
+                                              what='source'), None))
             except PackageFileError as error:
-                folders.append((None, f'source {error}'))
+                folders.append((None, str(error)))
         return folders
 
     def _scan(self, folders):
