@@ -20,7 +20,7 @@ from service_tutorial.robot_files import file_model_name, read_robot_file, Robot
 from service_tutorial.sim import frames
 from service_tutorial.sim.core_logs import core_logger
 from service_tutorial.sim.package_files import confined_path, PackageFileError
-from service_tutorial.sim.scenery import Scenery
+from service_tutorial.sim.scenery import Scenery, SceneryError
 from service_tutorial.sim.spawning import SpawnOrder
 from service_tutorial.sim.validation import quoted, WorldError
 from service_tutorial.sim.world_files import NO_RESOURCE, read_world_file, StartModel
@@ -38,6 +38,7 @@ MODEL_PARAMETERS = ('models', 'model_names', 'model_namespaces', 'model_poses')
 MISSING_ASSETS = 'missing assets'
 UNSUPPORTED_ASSETS = 'unsupported assets'
 MODEL_REFUSED = 'model refused'
+KEPT_SCENERIES = 8  # the sceneries of the last worlds loaded, kept read and checked
 
 
 def resolve_model_path(model):
@@ -90,6 +91,8 @@ class WorldLoader:
         self.package_share = package_share
         self.current = None  # the LoadedWorld, None in the no-world state
         self.start_up_models = frozenset()  # the Models the current world spawned
+        self._trial_world = None  # made at the first load, kept with the robots it built
+        self._sceneries = {}  # real path -> (mtime, size, Scenery): a scenery is read once
         node.parameters.refuse_when(self.refuse_playing)
 
     def refuse_playing(self, values):
@@ -186,7 +189,7 @@ class WorldLoader:
             scenery = Scenery.from_text(loaded.scenery_text, 'resource_string',
                                         package_resolver=self.package_share)
         elif world.scenery:
-            scenery = Scenery(world.scenery, package_resolver=self.package_share)
+            scenery = self._scenery(world.scenery)
         orders, namespaces = [], []
         for model in world.models:
             try:
@@ -206,18 +209,35 @@ class WorldLoader:
                                  f'model {quoted(name)}: {error}')
         return PreparedWorld(loaded, scenery, tuple(orders), tuple(namespaces))
 
+    def _scenery(self, path):
+        """Return the Scenery of a file, read again only when the file changed."""
+        try:
+            stat = os.stat(path)
+        except OSError as error:
+            raise SceneryError(f'cannot read scenery file {quoted(path)}: {error.strerror}') \
+                from None
+        kept = self._sceneries.pop(path, None)
+        if kept is None or kept[:2] != (stat.st_mtime_ns, stat.st_size):
+            kept = (stat.st_mtime_ns, stat.st_size,
+                    Scenery(path, package_resolver=self.package_share))
+        self._sceneries[path] = kept  # the latest last
+        while len(self._sceneries) > KEPT_SCENERIES:
+            del self._sceneries[next(iter(self._sceneries))]
+        return kept[2]
+
     def _trial(self, scenery, orders):
-        """Return what spawning orders into a new world with scenery gives, said quietly."""
+        """Return what spawning orders into a world with scenery gives, said quietly."""
         from service_tutorial.sim.world import World
-        parameters = self.node.parameters
         world_log = core_logger(WORLD_LOG)
         level = world_log.level
         world_log.setLevel(logging.WARNING)  # the trial's spawns are not the world's
         try:
-            return World(timestep=parameters['timestep'],
-                         cmd_vel_timeout=parameters['cmd_vel_timeout'],
-                         package_resolver=self.package_share,
-                         scenery=scenery).spawn_urdf_batch(orders)
+            if self._trial_world is None:  # kept: it builds each robot file once
+                parameters = self.node.parameters
+                self._trial_world = World(timestep=parameters['timestep'],
+                                          package_resolver=self.package_share)
+            self._trial_world.load(scenery)
+            return self._trial_world.spawn_urdf_batch(orders)
         finally:
             world_log.setLevel(level)
 

@@ -11,6 +11,7 @@ import math
 import os
 
 from geometry_msgs.msg import PoseStamped
+import mujoco
 import pytest
 from repository import read_model, TEST_MODELS
 from simulation_interfaces.msg import Bounds, Result, SimulationState, TagsFilter
@@ -389,3 +390,21 @@ def test_an_unknown_world_ends_the_program_with_one_line(start_program):
     assert process.returncode == 2, stderr
     assert stderr.strip().splitlines()[-1].startswith('mujoco_world: ')
     assert "no world named 'atlantis'" in stderr
+
+
+def test_a_scenery_changed_on_disk_is_read_again(world, world_package):
+    uri, share = world_package
+    load_or_fail(world, uri + 'worlds/ok.world.xml')
+    assert box_sides(world) == [pytest.approx(0.4)] * 2  # the red box: its visual, its collision
+    crates = share / 'worlds' / 'crates.urdf'
+    crates.write_text(crates.read_text().replace('0.4 0.4 0.4', '1.2 1.2 1.2'))
+    os.utime(crates, ns=(crates.stat().st_atime_ns, crates.stat().st_mtime_ns + 10 ** 9))
+    load_or_fail(world, uri + 'worlds/ok.world.xml')
+    assert box_sides(world) == [pytest.approx(1.2)] * 2
+
+
+def box_sides(world):
+    """Return the side of every box in the world's compiled model."""
+    model = world.node.world.model
+    return [2.0 * model.geom_size[index, 0] for index in range(model.ngeom)
+            if model.geom_type[index] == mujoco.mjtGeom.mjGEOM_BOX]
