@@ -251,7 +251,7 @@ class MujocoWorld(Node):
     def publish_due(self):
         """Publish /clock, the models' streams and the camera where their time has come."""
         for removal in self.world.take_removed_models():  # they kept blowing up
-            self._forget_model(removal.name)
+            self.forget_model(removal.name)
             self._announce_removal(removal)
         self.world.background_renders.deliver()  # the cameras' frames drawn meanwhile
         now = self.world.time
@@ -355,7 +355,7 @@ class MujocoWorld(Node):
     def delete_model(self, name):
         """Remove a model from the world along with its ROS interface."""
         self.world.delete_model(name)
-        self._forget_model(name)
+        self.forget_model(name)
         self.viewer.reopen()
 
     def holding_time(self, operation):
@@ -369,7 +369,7 @@ class MujocoWorld(Node):
                     self.step_timer.reset()  # the next tick a whole period from now
         return held
 
-    def _forget_model(self, name):
+    def forget_model(self, name):
         """Destroy the ROS interface of a model that left the world."""
         interface = self.models.pop(name, None)
         if interface is not None:

@@ -93,6 +93,7 @@ class WorldLoader:
         self.start_up_models = frozenset()  # the Models the current world spawned
         self._trial_world = None  # made at the first load, kept with the robots it built
         self._sceneries = {}  # real path -> (mtime, size, Scenery): a scenery is read once
+        self._tried = frozenset()  # (Scenery, SpawnOrders) that spawned in the trial world
         node.parameters.refuse_when(self.refuse_playing)
 
     def refuse_playing(self, values):
@@ -200,13 +201,17 @@ class WorldLoader:
             orders.append(SpawnOrder(model.name or file_model_name(model.path), robot.urdf,
                                      position=model.position, orientation=model.orientation,
                                      base_dir=robot.base_dir))
-        tried = self._trial(scenery, orders) if trial else ()
-        refused = [(order.name, outcome) for order, outcome in zip(orders, tried)
-                   if isinstance(outcome, WorldError)]
-        if refused:
-            name, error = refused[0]
-            raise WorldFileError(MODEL_REFUSED, f'world {quoted(world.name)} cannot spawn its '
-                                 f'model {quoted(name)}: {error}')
+        tried = (scenery, tuple(orders))  # the same files and poses spawn the same way
+        if trial and tried not in self._tried:
+            refused = [(order.name, outcome) for order, outcome
+                       in zip(orders, self._trial(scenery, orders))
+                       if isinstance(outcome, WorldError)]
+            if refused:
+                name, error = refused[0]
+                raise WorldFileError(MODEL_REFUSED, f'world {quoted(world.name)} cannot spawn '
+                                     f'its model {quoted(name)}: {error}')
+            self._tried = (self._tried | {tried}) if len(self._tried) < KEPT_SCENERIES \
+                else {tried}
         return PreparedWorld(loaded, scenery, tuple(orders), tuple(namespaces))
 
     def _scenery(self, path):
@@ -280,10 +285,11 @@ class WorldLoader:
             raise WorldError(f'no world is loaded: {what} waits for a world (LoadWorld)')
 
     def _clear(self):
+        """Stop any stepping and destroy every model's topics; World.load() drops the models."""
         node = self.node
         node.requested_steps.stop('the world is replaced')
         for name in node.world.model_names():
-            node.delete_model(name)
+            node.forget_model(name)
 
 
 def path_of_uri(uri, package_share):
