@@ -104,8 +104,9 @@ def worlds_table(observer, config):
     table.note = (
         'Each round loads the parking world, then the yard, by their package:// uris, from '
         'request to answer; each load removes every entity with its topics, reads the world '
-        'file, its scenery and tinybot, tries them in a trial world, builds the world and '
-        "spawns tinybot. core world: the ROS-free core's World built with the same scenery and "
+        'file, its scenery (kept while unchanged) and tinybot, tries them in a trial world '
+        '(once for the same scenery and spawns), builds the world and spawns tinybot. '
+        "core world: the ROS-free core's World built with the same scenery and "
         'tinybot spawned, taken in turns with the load. scenery compile: the scenery alone, '
         'read, checked and compiled into a bare scene. After each load R2-D2 is spawned at the '
         f'named pose GetNamedPoses gives ({", ".join(spawns)}, SpawnEntity p50).')

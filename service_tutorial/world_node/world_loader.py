@@ -6,6 +6,8 @@ package's worlds/ hold them, found by name. Loading one is all or nothing: the n
 models and their files are read and tried in a trial world first (World.trial), and only
 if all of them hold does the node remove every entity with its topics, load the scenery and
 spawn the world's models. A load that fails leaves the world the node had exactly as it was.
+A scenery is read once while its file is unchanged, and the same scenery with the same spawn
+orders is tried once: loading a world again costs little more than building it.
 Unloading leaves the no-world state: no entities, nothing steps or spawns until a load.
 """
 
