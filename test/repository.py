@@ -31,3 +31,16 @@ def model_path(name, folder=MODELS):
 def read_model(name, folder=MODELS):
     """Return the URDF of a model, named without .urdf, in models/ or another folder."""
     return read_file(model_path(name, folder))
+
+
+def install_package(tmp_path, monkeypatch, name):
+    """Install an empty ament package under tmp_path, found first; return its share folder."""
+    prefix = tmp_path / 'prefix'
+    index = prefix / 'share' / 'ament_index' / 'resource_index' / 'packages'
+    index.mkdir(parents=True, exist_ok=True)
+    (index / name).write_text('')
+    share = prefix / 'share' / name
+    share.mkdir(parents=True, exist_ok=True)
+    monkeypatch.setenv('AMENT_PREFIX_PATH',
+                       f'{prefix}{os.pathsep}{os.environ.get("AMENT_PREFIX_PATH", "")}')
+    return share

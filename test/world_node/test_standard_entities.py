@@ -10,7 +10,7 @@ import os
 
 from ament_index_python.packages import get_package_share_directory
 import pytest
-from repository import read_model, TEST_MODELS
+from repository import install_package, read_model, TEST_MODELS
 from simulation_interfaces.msg import EntityCategory, EntityInfo, EntityState, Resource
 from simulation_interfaces.msg import Result, SpawnEntity as SpawnRequest, SpawnResult
 from simulation_interfaces.srv import DeleteEntity, GetEntityBounds, GetEntityInfo
@@ -61,12 +61,7 @@ def test_spawn_by_file_uri_inside_a_package_share(world):
 @pytest.fixture
 def hostile_package(tmp_path, monkeypatch):
     """Install a package with a URDF, a xacro file and a link to a file outside its share."""
-    prefix = tmp_path / 'prefix'
-    index = prefix / 'share' / 'ament_index' / 'resource_index' / 'packages'
-    index.mkdir(parents=True)
-    (index / 'hostile_pkg').write_text('')
-    share = prefix / 'share' / 'hostile_pkg'
-    share.mkdir()
+    share = install_package(tmp_path, monkeypatch, 'hostile_pkg')
     outside = tmp_path / 'outside.urdf'
     outside.write_text(CRATE)
     (share / 'escape.urdf').symlink_to(outside)
@@ -76,8 +71,6 @@ def hostile_package(tmp_path, monkeypatch):
         '<robot name="tower" xmlns:xacro="http://www.ros.org/wiki/xacro">'
         '<xacro:property name="side" value="0.3"/>'
         + crate_link.replace('0.4 0.4 0.4', '${side} ${side} 1.0') + '</robot>')
-    monkeypatch.setenv('AMENT_PREFIX_PATH',
-                       f'{prefix}{os.pathsep}{os.environ.get("AMENT_PREFIX_PATH", "")}')
     return share, outside
 
 

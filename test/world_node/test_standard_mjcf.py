@@ -11,7 +11,7 @@ import os
 import shutil
 
 import pytest
-from repository import MJCF_ARM, MJCF_CRATE, read_file, TEST_MODELS
+from repository import install_package, MJCF_ARM, MJCF_CRATE, read_file, TEST_MODELS
 from sensor_msgs.msg import JointState
 from simulation_interfaces.msg import EntityCategory, Resource, Result
 from simulation_interfaces.msg import SpawnEntity as SpawnRequest, SpawnResult
@@ -35,11 +35,7 @@ def world(ros):
 @pytest.fixture
 def mjcf_package(tmp_path, monkeypatch):
     """Install a package of MJCF files: an arm, a mesh box, and files that reach out of it."""
-    prefix = tmp_path / 'prefix'
-    index = prefix / 'share' / 'ament_index' / 'resource_index' / 'packages'
-    index.mkdir(parents=True)
-    (index / 'mjcf_pkg').write_text('')
-    share = prefix / 'share' / 'mjcf_pkg'
+    share = install_package(tmp_path, monkeypatch, 'mjcf_pkg')
     (share / 'meshes').mkdir(parents=True)
     (share / 'arm.xml').write_text(ARM)
     shutil.copy(os.path.join(TEST_MODELS, 'meshes', 'box.obj'), share / 'meshes' / 'box.obj')
@@ -51,8 +47,6 @@ def mjcf_package(tmp_path, monkeypatch):
                            ('linked', 'link.obj'), ('absent', 'absent.obj')):
         (share / f'{name}.mjcf').write_text(mesh_box(name, filename))
     (share / 'huge.xml').write_text(CRATE + ' ' * (10 * 1024 * 1024))
-    monkeypatch.setenv('AMENT_PREFIX_PATH',
-                       f'{prefix}{os.pathsep}{os.environ.get("AMENT_PREFIX_PATH", "")}')
     return share
 
 

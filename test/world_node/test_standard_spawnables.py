@@ -13,7 +13,7 @@ import time
 from file_opens import FileOpens
 from geometry_msgs.msg import Twist
 import pytest
-from repository import TEST_MODELS
+from repository import install_package, TEST_MODELS
 from simulation_interfaces.msg import Bounds, Result, SimulatorFeatures
 from simulation_interfaces.srv import GetEntityBounds, GetSimulatorFeatures, GetSpawnables
 from standard_entities import close, CRATE, position_of, spawn_or_fail, stamped
@@ -70,12 +70,8 @@ def my_description(tmp_path, monkeypatch):
     MJCF pendulum and a file that is XML but not MJCF; extra/ a crate read only as a source;
     outside/, beside the prefix, the files a leaky search would read.
     """
-    prefix = tmp_path / 'prefix'
-    index = prefix / 'share' / 'ament_index' / 'resource_index' / 'packages'
-    index.mkdir(parents=True)
-    (index / 'my_description').write_text('')
-    share = prefix / 'share' / 'my_description'
-    shutil.copytree(os.path.join(TEST_MODELS, 'my_description'), share)
+    share = install_package(tmp_path, monkeypatch, 'my_description')
+    shutil.copytree(os.path.join(TEST_MODELS, 'my_description'), share, dirs_exist_ok=True)
     (share / 'mjcf').mkdir()
     (share / 'mjcf' / 'pendulum.xml').write_text(PENDULUM)
     (share / 'urdf' / 'package.xml').write_text('<package format="3"><name>x</name></package>')
@@ -83,8 +79,6 @@ def my_description(tmp_path, monkeypatch):
     (share / 'extra' / 'crate.urdf').write_text(CRATE)
     outside = tmp_path / 'outside'
     outside.mkdir()
-    monkeypatch.setenv('AMENT_PREFIX_PATH',
-                       f'{prefix}{os.pathsep}{os.environ.get("AMENT_PREFIX_PATH", "")}')
     return share, outside
 
 

@@ -13,7 +13,7 @@ import os
 from geometry_msgs.msg import PoseStamped
 import mujoco
 import pytest
-from repository import read_model, TEST_MODELS
+from repository import install_package, read_model, TEST_MODELS
 from simulation_interfaces.msg import Bounds, Result, SimulationState, TagsFilter
 from simulation_interfaces.srv import GetAvailableWorlds, GetCurrentWorld, GetEntities
 from simulation_interfaces.srv import GetEntityState, GetNamedPoseBounds, GetNamedPoses
@@ -233,11 +233,7 @@ def test_a_world_and_a_scenery_load_from_text(world):
 @pytest.fixture
 def world_package(tmp_path, monkeypatch):
     """Install a package with good and hostile world files, and a file outside its share."""
-    prefix = tmp_path / 'prefix'
-    index = prefix / 'share' / 'ament_index' / 'resource_index' / 'packages'
-    index.mkdir(parents=True)
-    (index / 'worlds_pkg').write_text('')
-    share = prefix / 'share' / 'worlds_pkg'
+    share = install_package(tmp_path, monkeypatch, 'worlds_pkg')
     (share / 'worlds').mkdir(parents=True)
     (share / 'extra').mkdir()
     outside = tmp_path / 'outside.world.xml'
@@ -269,8 +265,6 @@ def world_package(tmp_path, monkeypatch):
         (share / name).write_text(text)
     (share / 'huge.world.xml').write_text('<world>' + '<tag>t</tag>' * 400000 + '</world>')
     (share / 'link.world.xml').symlink_to(outside)
-    monkeypatch.setenv('AMENT_PREFIX_PATH',
-                       f'{prefix}{os.pathsep}{os.environ.get("AMENT_PREFIX_PATH", "")}')
     return 'package://worlds_pkg/', share
 
 
