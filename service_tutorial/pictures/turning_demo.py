@@ -465,7 +465,8 @@ def main(args=None):
         say('turning_demo: interrupted')
     finally:
         if executor is not None:
-            executor.shutdown()
+            # Bounded: the children are stopped below whatever the middleware does meanwhile.
+            executor.shutdown(timeout_sec=STOP_TIMEOUT)
         if node is not None:
             node.destroy_node()
         rclpy.try_shutdown()

@@ -12,6 +12,7 @@ import os
 
 from geometry_msgs.msg import PoseStamped
 import mujoco
+from programs import program_path
 import pytest
 from repository import install_package, read_model, TEST_MODELS
 from simulation_interfaces.msg import Bounds, Result, SimulationState, TagsFilter
@@ -379,7 +380,7 @@ def test_an_empty_world_parameter_starts_without_a_world(ros):
 
 
 def test_an_unknown_world_ends_the_program_with_one_line(start_program):
-    process = start_program(['mujoco_world', '--ros-args', '-p', 'world:=atlantis'])
+    process = start_program([program_path('mujoco_world'), '--ros-args', '-p', 'world:=atlantis'])
     _, stderr = process.communicate(timeout=60)
     assert process.returncode == 2, stderr
     assert stderr.strip().splitlines()[-1].startswith('mujoco_world: ')
