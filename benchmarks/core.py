@@ -4,7 +4,7 @@ import copy
 import math
 import time
 
-from fleet import model_path
+from fleet import model_path, spawn_file
 import mujoco
 from report import median_ms, Table
 
@@ -13,13 +13,13 @@ def core_table(config):
     """Measure spawning into and stepping a World in this process, no ROS, against limits."""
     from service_tutorial.sim.world import World
     world = World()
-    world.spawn_urdf_file('tinybot', model_path('tinybot'))
+    spawn_file(world, 'tinybot', model_path('tinybot'))
     world.step(250)
     spawns = []
     for index in range(config.core_spawns):
         start = time.perf_counter()
-        world.spawn_urdf_file(f'r2d2_{index}', model_path('r2d2'),
-                              position=(2.0 + index, 0.0, 0.0))
+        spawn_file(world, f'r2d2_{index}', model_path('r2d2'),
+                   position=(2.0 + index, 0.0, 0.0))
         spawns.append(time.perf_counter() - start)
     model, raw = world.model, copy.copy(world.data)  # bare MuJoCo, from the same state
     world_best = raw_best = math.inf

@@ -27,6 +27,22 @@ def read_model(name):
         return model_file.read()
 
 
+def spawn_robot(world, name, text, **placement):
+    """Spawn one robot from its URDF text into a ROS-free World; return its Model or raise."""
+    from service_tutorial.sim.spawning import SpawnOrder
+    outcome, = world.spawn([SpawnOrder(name, text, **placement)])
+    if isinstance(outcome, Exception):
+        raise outcome
+    return outcome
+
+
+def spawn_file(world, name, path, **placement):
+    """Spawn one robot from a URDF file into a ROS-free World, meshes by its folder."""
+    with open(path) as robot_file:
+        text = robot_file.read()
+    return spawn_robot(world, name, text, base_dir=os.path.dirname(path), **placement)
+
+
 def fleet_names(count):
     """Return the model names (and namespaces) of a fleet of tinybots."""
     return [f'bot{index}' for index in range(count)]
@@ -63,7 +79,7 @@ def core_fleet(count, *, driving):
     world = World(cmd_vel_timeout=0.0)
     path = model_path('tinybot')
     for index, name in enumerate(fleet_names(count)):
-        world.spawn_urdf_file(name, path, position=fleet_position(index))
+        spawn_file(world, name, path, position=fleet_position(index))
         if driving:
             world.models[name].drive().command_velocity(DRIVE_LINEAR_X, DRIVE_ANGULAR_Z)
     return world

@@ -3,7 +3,7 @@
 import math
 import time
 
-from fleet import core_fleet, fleet_parameters, read_model
+from fleet import core_fleet, fleet_parameters, read_model, spawn_robot
 from harness import ExecutorThread, quiet_console
 from report import percentiles, Table
 
@@ -41,7 +41,7 @@ def spawn_request(index):
 def timed_core_spawn_and_delete(world, urdf):
     """Spawn R2-D2 where the lesson does on a ROS-free World, delete it; return both times."""
     start = time.perf_counter()
-    world.spawn_urdf('r2d2', urdf, position=LESSON_POSITION, orientation=LESSON_ORIENTATION)
+    spawn_robot(world, 'r2d2', urdf, position=LESSON_POSITION, orientation=LESSON_ORIENTATION)
     middle = time.perf_counter()
     world.delete_model('r2d2')
     return middle - start, time.perf_counter() - middle
@@ -57,7 +57,7 @@ def core_round_trips(models_present, calls, *, with_reset=True):
         spawns.append(spawn)
         deletes.append(delete)
     if with_reset:
-        world.spawn_urdf('r2d2', urdf, position=LESSON_POSITION, orientation=LESSON_ORIENTATION)
+        spawn_robot(world, 'r2d2', urdf, position=LESSON_POSITION, orientation=LESSON_ORIENTATION)
         for _ in range(calls):
             start = time.perf_counter()
             world.reset_world()

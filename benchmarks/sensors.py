@@ -4,7 +4,7 @@ import os
 import statistics
 import time
 
-from fleet import FleetWorld, model_path, read_model
+from fleet import FleetWorld, model_path, read_model, spawn_robot
 from harness import wait_for_count
 import mujoco
 import numpy as np
@@ -24,7 +24,7 @@ def sensor_world(samples=360):
     from service_tutorial.sim.world import World
     world = World(scenery=model_path('yard'))
     urdf = read_model('tinybot').replace('<samples>360</samples>', f'<samples>{samples}</samples>')
-    world.spawn_urdf('tinybot', urdf, base_dir=os.path.dirname(model_path('tinybot')))
+    spawn_robot(world, 'tinybot', urdf, base_dir=os.path.dirname(model_path('tinybot')))
     world.step(250)
     return world
 

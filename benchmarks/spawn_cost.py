@@ -11,7 +11,7 @@ present. The spawn_cost section of world_benchmark.py.
 import os
 import time
 
-from fleet import core_fleet, fleet_position, model_path, read_model
+from fleet import core_fleet, fleet_position, model_path, read_model, spawn_robot
 import mujoco
 import numpy as np
 from report import Table
@@ -101,7 +101,7 @@ def _cycles(world, bare, urdf, base_dir, calls, kind):
     timings = {'world spawn': [], 'world delete': [], 'bare spawn': [], 'bare delete': []}
     for index in range(calls):
         text = new_text(urdf, index) if kind == COLD else urdf
-        spawn, _ = _timed(world.spawn_urdf, 'spawned', text, position=SPAWN_POSITION,
+        spawn, _ = _timed(spawn_robot, world, 'spawned', text, position=SPAWN_POSITION,
                           base_dir=base_dir)
         delete, _ = _timed(world.delete_model, 'spawned')
         timings['world spawn'].append(spawn)
@@ -147,7 +147,7 @@ def box_row(count):
     world = core_fleet(0, driving=False)
     start = time.perf_counter()
     for index in range(count):
-        world.spawn_urdf(f'box{index}', BOX_URDF, position=box_position(index))
+        spawn_robot(world, f'box{index}', BOX_URDF, position=box_position(index))
     for index in range(count):
         world.delete_model(f'box{index}')
     world_total = time.perf_counter() - start

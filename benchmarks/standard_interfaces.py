@@ -13,7 +13,7 @@ import ctypes
 import time
 
 from fleet import core_fleet, DRIVE_ANGULAR_Z, Fleet, fleet_names, fleet_parameters
-from fleet import fleet_position, RawFleet, read_model
+from fleet import fleet_position, RawFleet, read_model, spawn_robot
 from harness import BenchmarkError, ExecutorThread, prompt_thread_switches, quiet_console
 from harness import THREAD_SWITCH_INTERVAL, wait_until
 import mujoco
@@ -162,7 +162,7 @@ def batch_spawn(count, resource):
 def world_description(urdf):
     """Return the MjSpec the world builds of a robot's URDF, as every spawn of it attaches."""
     from service_tutorial.sim.world import World
-    return World().spawn_urdf('probe', urdf).description.spec
+    return spawn_robot(World(), 'probe', urdf).description.spec
 
 
 def bare_batch(robot_spec, count):

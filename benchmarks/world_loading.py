@@ -12,6 +12,7 @@ trivial Trigger on the world's executor.
 import os
 import time
 
+from fleet import spawn_robot
 from harness import BenchmarkError, prompt_thread_switches, quiet_console
 from report import median_ms, Table
 from standard_interfaces import StandardWorld, TRIGGERS_ALLOWED
@@ -34,7 +35,7 @@ def core_world(scenery_path, tinybot):
     from service_tutorial.sim.world import World
     start = time.perf_counter()
     world = World(scenery=scenery_path)
-    world.spawn_urdf('tinybot', tinybot)
+    spawn_robot(world, 'tinybot', tinybot)
     return time.perf_counter() - start
 
 

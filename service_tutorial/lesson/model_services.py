@@ -29,7 +29,7 @@ from ament_index_python.packages import get_package_share_directory
 from geometry_msgs.msg import Pose
 from rclpy.callback_groups import MutuallyExclusiveCallbackGroup
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
-from service_tutorial.robot_files import read_robot_file
+from service_tutorial.sim.robot_files import read_path
 from srv_interfaces.srv import DeleteModel, GetModelState, SpawnModel
 from std_srvs.srv import Empty
 
@@ -130,14 +130,16 @@ def spawn_model(node, name, *, model_xml=None, model_file=None, pose=None, names
     Spawn a URDF model in the world; return the SpawnModel response.
 
     Give the URDF as text (model_xml) or as a path (model_file), which may be a xacro file:
-    it is expanded here, with xacro_arguments {name: value}, and robot_files.RobotFileError
-    says why it could not be. pose is a geometry_msgs/Pose in reference_frame (default: the
-    origin; conversions.make_pose builds one); namespace puts the model's topics under it.
+    it is expanded here, with xacro_arguments {name: value}, and a WorldError (of
+    sim/robot_files.py) says why it could not be. pose is a geometry_msgs/Pose in
+    reference_frame (default: the origin; conversions.make_pose builds one); namespace puts
+    the model's topics under it.
     """
     if (model_xml is None) == (model_file is None):
         raise ValueError('give the model as model_xml or as model_file, exactly one of them')
     if model_file is not None:
-        model_xml = read_robot_file(model_file, xacro_arguments).urdf
+        model_xml = read_path(model_file, xacro_arguments=xacro_arguments,
+                              formats=('urdf',)).text
     request = SpawnModel.Request()
     request.model_name = name
     request.model_xml = model_xml

@@ -16,7 +16,8 @@ from service_tutorial.conversions import make_pose
 from service_tutorial.lesson.client_arguments import parse_client_arguments
 from service_tutorial.lesson.model_services import model_path, response_text, spawn_model
 from service_tutorial.node_main import program_arguments, run_node
-from service_tutorial.robot_files import parse_xacro_arguments, RobotFileError
+from service_tutorial.sim.robot_files import parse_xacro_arguments
+from service_tutorial.sim.validation import WorldError
 
 # The lesson's pose: z rotation of -pi/2 as a quaternion (x, y, z, w).
 LESSON_POSITION = (-2.0, 1.0, 1.0)
@@ -96,7 +97,7 @@ def main(args=None):
         return 0 if response.success else 1
     return run_node(lambda: Node('spawn_model_client'), spawn, args=args,
                     program='spawn_model_client',
-                    errors=(OSError, RobotFileError, TimeoutError))
+                    errors=(OSError, WorldError, TimeoutError))
 
 
 if __name__ == '__main__':

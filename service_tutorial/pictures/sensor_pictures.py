@@ -19,6 +19,8 @@ from service_tutorial.pictures.image_files import write_png
 from service_tutorial.sim.plugins.camera_sensor import CameraSensor
 from service_tutorial.sim.plugins.ray_sensor import RaySensor
 from service_tutorial.sim.rendering import SceneCamera
+from service_tutorial.sim.robot_files import read_path
+from service_tutorial.sim.spawning import SpawnOrder
 from service_tutorial.sim.world import World
 
 TOP_VIEW_FILE = 'sensors_scan_from_above.png'
@@ -74,10 +76,11 @@ def draw_scan(image, camera, points, origin):
 def make_pictures(output, *, yaw=-0.35, size=640):
     """Write the view from above with the scan, and the camera frame; return their paths."""
     world = World(scenery=model_file('yard.urdf'))
-    world.spawn_urdf_file('tinybot', model_file('tinybot.urdf'),
-                          orientation=(math.cos(yaw / 2), 0.0, 0.0, math.sin(yaw / 2)))
-    world.spawn_urdf_file('r2d2', model_file('r2d2.urdf'), position=LESSON_R2D2[0],
-                          orientation=LESSON_R2D2[1])
+    world.spawn([
+        SpawnOrder.of('tinybot', read_path(model_file('tinybot.urdf')),
+                      orientation=(math.cos(yaw / 2), 0.0, 0.0, math.sin(yaw / 2))),
+        SpawnOrder.of('r2d2', read_path(model_file('r2d2.urdf')), position=LESSON_R2D2[0],
+                      orientation=LESSON_R2D2[1])])
     world.step(round(SETTLE_TIME / world.timestep))
     tinybot = world.models['tinybot']
     laser, camera = tinybot.plugin(RaySensor), tinybot.plugin(CameraSensor)

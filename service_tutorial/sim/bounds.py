@@ -45,12 +45,15 @@ class OrientedBoxes:
 def collision_boxes(world, model):
     """Return the OrientedBoxes around the collision geoms of a world's model."""
     world.body_state(model.root_id)  # brings the world's kinematics up to date
-    mj_model = world.model
+    return geom_boxes(world.model, world.data, _collision_geoms(world.model, model.root_id))
+
+
+def _collision_geoms(mj_model, root_id):
+    """Return the ids of the collision geoms of the tree under a root body."""
     # A URDF's collision geoms are in COLLISION_GROUP; an MJCF's are any that collide.
     collides = (mj_model.geom_contype | mj_model.geom_conaffinity) != 0
-    geoms = np.flatnonzero(((mj_model.geom_group == COLLISION_GROUP) | collides)
-                           & (mj_model.body_rootid[mj_model.geom_bodyid] == model.root_id))
-    return geom_boxes(mj_model, world.data, geoms)
+    return np.flatnonzero(((mj_model.geom_group == COLLISION_GROUP) | collides)
+                          & (mj_model.body_rootid[mj_model.geom_bodyid] == root_id))
 
 
 def geom_boxes(mj_model, data, geoms):
@@ -92,9 +95,8 @@ def description_box(description):
     data = mujoco.MjData(mj_model)
     mujoco.mj_kinematics(mj_model, data)
     root = mj_model.body(description.root_link).id
-    geoms = np.flatnonzero((mj_model.geom_group == COLLISION_GROUP)
-                           & (mj_model.body_rootid[mj_model.geom_bodyid] == root))
-    return box_in_body_frame(geom_boxes(mj_model, data, geoms), data, root)
+    return box_in_body_frame(geom_boxes(mj_model, data, _collision_geoms(mj_model, root)),
+                             data, root)
 
 
 def overlaps_sphere(boxes, centre, radius):

@@ -1,5 +1,5 @@
 """
-The robots a world has built from URDF or MJCF, kept so that the same text spawns again unbuilt.
+The robots a world has built from their texts, kept so that the same text spawns again unbuilt.
 
 Building a robot (parsing, checks, yourdfpy, the spec builder) took most of a spawn; a fleet
 spawns one description many times. A description is kept under a digest of its text and the
@@ -13,8 +13,7 @@ import collections
 import hashlib
 import os
 
-from service_tutorial.sim.mjcf import load_mjcf
-from service_tutorial.sim.urdf.builder import load_urdf
+from service_tutorial.sim.description_formats import FORMATS
 
 # Descriptions kept per world, the least recently spawned dropped first.
 CACHED_DESCRIPTIONS = 16
@@ -42,26 +41,18 @@ class DescriptionCache:
         self._size = size
         self._kept = collections.OrderedDict()  # key -> (description, mesh stamps)
 
-    def load(self, urdf_xml, base_dir=None, model_format='urdf'):
-        """
-        Return the RobotDescription of URDF text, or raise UrdfError as load_urdf() does.
-
-        With model_format 'mjcf', of MJCF text, or raise DescriptionError as load_mjcf() does.
-        """
-        text = urdf_xml.encode() if isinstance(urdf_xml, str) else bytes(urdf_xml)
-        key = (hashlib.sha256(text).digest(), isinstance(urdf_xml, str),
+    def load(self, text, base_dir=None, model_format='urdf'):
+        """Return the RobotDescription of a text in a format, or raise DescriptionError."""
+        data = text.encode() if isinstance(text, str) else bytes(text)
+        key = (hashlib.sha256(data).digest(), isinstance(text, str),
                os.path.realpath(base_dir) if base_dir else None, model_format)
         kept = self._kept.pop(key, None)
         if kept is not None and _mesh_stamps(kept[0].mesh_files) == kept[1]:
             self._kept[key] = kept
             return kept[0]
-        if model_format == 'mjcf':
-            description = load_mjcf(urdf_xml, base_dir=base_dir,
-                                    package_resolver=self._package_resolver)
-        else:
-            description = load_urdf(urdf_xml, base_dir=base_dir,
-                                    package_resolver=self._package_resolver,
-                                    timestep=self._timestep)
+        description = FORMATS[model_format].load(
+            text, base_dir=base_dir, package_resolver=self._package_resolver,
+            timestep=self._timestep)
         stamps = _mesh_stamps(description.mesh_files)
         if not description.missing_meshes and stamps is not None:
             self._kept[key] = (description, stamps)
@@ -81,11 +72,10 @@ class _BatchLoader:
         self._cache = cache
         self._loaded = {}  # (id of the text, base_dir) -> (text, description)
 
-    def load(self, urdf_xml, base_dir=None, model_format='urdf'):
+    def load(self, text, base_dir=None, model_format='urdf'):
         """Return the RobotDescription of a robot's text, as the cache's own load does."""
-        key = (id(urdf_xml), base_dir, model_format)
+        key = (id(text), base_dir, model_format)
         loaded = self._loaded.get(key)
-        if loaded is None or loaded[0] is not urdf_xml:
-            loaded = self._loaded[key] = (urdf_xml, self._cache.load(urdf_xml, base_dir,
-                                                                     model_format))
+        if loaded is None or loaded[0] is not text:
+            loaded = self._loaded[key] = (text, self._cache.load(text, base_dir, model_format))
         return loaded[1]

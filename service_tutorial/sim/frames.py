@@ -11,6 +11,7 @@ import mujoco
 import numpy as np
 from service_tutorial.sim import validation
 from service_tutorial.sim.validation import quoted
+from service_tutorial.sim.validation import Reason
 from service_tutorial.sim.validation import SCOPE_SEPARATOR
 from service_tutorial.sim.validation import WORLD_FRAMES
 from service_tutorial.sim.validation import WorldError
@@ -145,7 +146,7 @@ def body_accelerations(mj_model, data, body_ids):
 def frame_body(reference_frame, models, mj_model):
     """Return the id of the body a reference frame names, given the spawned models by name."""
     if not isinstance(reference_frame, str):
-        raise WorldError(f'unknown reference frame {reference_frame!r}')
+        raise WorldError(f'unknown reference frame {reference_frame!r}', Reason.UNKNOWN_FRAME)
     if reference_frame in WORLD_FRAMES:
         return 0
     if reference_frame in models:
@@ -155,7 +156,8 @@ def frame_body(reference_frame, models, mj_model):
         body_id = mujoco.mj_name2id(mj_model, mujoco.mjtObj.mjOBJ_BODY, reference_frame)
         if body_id > 0:
             return body_id
-    raise WorldError(f'unknown reference frame {quoted(reference_frame)}')
+    raise WorldError(f'unknown reference frame {quoted(reference_frame)}',
+                     Reason.UNKNOWN_FRAME)
 
 
 def checked_state(model_name, anchored, *, position, orientation, linear_velocity,

@@ -37,12 +37,12 @@ class Removal:
     reason: str  # what the model did, as the world's log says: 'became unstable again...'
 
 
-def take_steps(model, data, count=1):
+def take_steps(model, data, count=1, *, logger=_logger):
     """Step the physics; return False if MuJoCo gave up on a step, out of memory for one."""
     try:
         mujoco.mj_step(model, data, count)
     except mujoco.FatalError as error:
-        _logger.warning('MuJoCo: %s', str(error).splitlines()[0])
+        logger.warning('MuJoCo: %s', str(error).splitlines()[0])
         return False
     return True
 
@@ -50,9 +50,10 @@ def take_steps(model, data, count=1):
 class Recovery:
     """Watches a world's steps: keeps where a chunk of steps began, and repairs a bad chunk."""
 
-    def __init__(self, world):
-        """Watch world; resize() must follow every recompile of its model."""
+    def __init__(self, world, logger=_logger):
+        """Watch world, telling logger what goes wrong; resize() follows every recompile."""
         self._world = world
+        self._logger = logger
         self._removed = []
         self.resize()
 
@@ -111,7 +112,7 @@ class Recovery:
                           'was given NaN, infinity or a huge value')
         for _ in range(chunk):
             mujoco.mj_getState(world.model, world.data, self._step_start_state, STATE)
-            completed = take_steps(world.model, world.data)
+            completed = take_steps(world.model, world.data, logger=self._logger)
             # Every retake resets a robot for the first time or removes one, so this ends.
             for _ in range(2 * len(world.models) + 1):
                 if completed and self.state_is_sane():
@@ -155,8 +156,8 @@ class Recovery:
         mujoco.mj_setState(world.model, world.data, self._step_start_state, STATE)
         self._clear_bad_state_warnings()
         if culprit.recovered:
-            _logger.error("model '%s' %s; it is removed from the world", culprit.name,
-                          UNSTABLE_AGAIN)
+            self._logger.error("model '%s' %s; it is removed from the world", culprit.name,
+                               UNSTABLE_AGAIN)
             world.rebuild({name: model for name, model in world.models.items()
                            if model is not culprit})
             self._removed.append(Removal(culprit.name, world.time, UNSTABLE_AGAIN))
@@ -165,7 +166,7 @@ class Recovery:
             culprit.recovered = True
         # A further retake of this step starts from here, without the culprit's bad state.
         mujoco.mj_getState(world.model, world.data, self._step_start_state, STATE)
-        return take_steps(world.model, world.data)
+        return take_steps(world.model, world.data, logger=self._logger)
 
     def _clear_bad_state_warnings(self):
         for kind in _BAD_STATE_WARNINGS:
@@ -175,8 +176,8 @@ class Recovery:
         """Put models back at their spawn pose at rest, saying why in the world's log."""
         world = self._world
         for model in models:
-            _logger.warning("model '%s' %s; it is put back to its spawn pose at rest",
-                            model.name, reason)
+            self._logger.warning("model '%s' %s; it is put back to its spawn pose at rest",
+                                 model.name, reason)
             model.put_back(world.model, world.data)
         if models:
             world.state_changed()
@@ -188,8 +189,8 @@ class Recovery:
         """Reset the whole data, keeping the state of every robot that is still sound."""
         world = self._world
         mj_model, data = world.model, world.data
-        _logger.warning('the simulation state is broken; resetting it, keeping the robots '
-                        'whose state is sound')
+        self._logger.warning('the simulation state is broken; resetting it, keeping the robots '
+                             'whose state is sound')
         broken = self._broken_models()
         kept = {name: model.saved_state(data, _KEPT_FIELDS)
                 for name, model in world.models.items() if model not in broken}
@@ -201,7 +202,7 @@ class Recovery:
             if name in kept:
                 model.restore_state(data, kept[name])
             elif model.plugins:
-                _logger.warning("model '%s' is put back to its spawn pose at rest", name)
+                self._logger.warning("model '%s' is put back to its spawn pose at rest", name)
                 model.reset_plugins()
         world.forward()
         world.schedule_events()

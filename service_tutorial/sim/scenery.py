@@ -10,25 +10,22 @@ a model: get_model_list does not name them, and no service moves or deletes them
 
 import os
 
-from lxml import etree
 import mujoco
 from service_tutorial.sim.description import UrdfError
+from service_tutorial.sim.robot_files import read_path, read_text
 from service_tutorial.sim.urdf.builder import load_urdf
-from service_tutorial.sim.urdf.hardened_xml import MAX_MODEL_XML_BYTES
 from service_tutorial.sim.urdf.hardened_xml import parse_xml
 from service_tutorial.sim.validation import quoted
+from service_tutorial.sim.validation import Reason
 from service_tutorial.sim.validation import WorldError
 
 # Names of the scenery's elements in the world's model; no model name holds a '/'.
 SCENERY_PREFIX = 'scenery/'
+NOT_STATIC = Reason.UNSUPPORTED_CONTENT  # what scenery may not hold: joints, plugins...
 
 
 class SceneryError(WorldError):
-    """A scenery the world refuses; unsupported: it holds what scenery may not (joints...)."""
-
-    def __init__(self, message, *, unsupported=False):
-        super().__init__(message)
-        self.unsupported = unsupported
+    """A scenery the world refuses: unreadable, or (UNSUPPORTED_CONTENT) not static."""
 
 
 class Scenery:
@@ -37,91 +34,85 @@ class Scenery:
     def __init__(self, path, *, package_resolver=None):
         """Read and check a URDF or MJCF file of static obstacles, or raise SceneryError."""
         self.path = os.path.abspath(path)
-        try:
-            with open(self.path, 'rb') as scenery_file:
-                text = scenery_file.read(MAX_MODEL_XML_BYTES + 1)
-        except OSError as error:
-            raise SceneryError(f'cannot read scenery file {quoted(path)}: {error.strerror}') \
-                from None
-        self._load(text, f'scenery file {quoted(path)}', os.path.dirname(self.path),
-                   package_resolver)
+        self._load(_read(read_path, self.path, what='scenery file'),
+                   f'scenery file {quoted(path)}', package_resolver)
 
     @classmethod
     def from_text(cls, text, what, *, package_resolver=None):
         """Return the Scenery of a URDF or MJCF text that names no file, or raise SceneryError."""
         scenery = cls.__new__(cls)
         scenery.path = None
-        scenery._load(text.encode('utf-8') if isinstance(text, str) else bytes(text), what,
-                      None, package_resolver)
+        scenery._load(_read(read_text, text, what), what, package_resolver)
         return scenery
 
-    def _load(self, text, what, base_dir, package_resolver):
-        if len(text) > MAX_MODEL_XML_BYTES:
-            raise SceneryError(f'{what} is larger than {MAX_MODEL_XML_BYTES} bytes')
-        try:
-            root = parse_xml(text, what)
-        except UrdfError as error:
-            raise SceneryError(str(error)) from None
-        tag = etree.QName(root).localname if isinstance(root.tag, str) else ''
-        if tag == 'robot':
+    def _load(self, source, what, package_resolver):
+        if source.model_format == 'urdf':
             self._spec, self._position, self._orientation = self._from_urdf(
-                text, what, base_dir, package_resolver)
-        elif tag == 'mujoco':
-            self._spec, self._position, self._orientation = self._from_mjcf(
-                root, text, what, base_dir)
+                source.text, what, source.base_dir, package_resolver)
         else:
-            raise SceneryError(f'{what} is neither URDF nor MJCF: its root element is '
-                               f'<{tag[:40]}>')
+            self._spec, self._position, self._orientation = self._from_mjcf(
+                source.text, what, source.base_dir)
         try:
             probe = mujoco.MjSpec()
             self.attach(probe)
             probe.compile()
         except Exception as error:
             reason = ' '.join(str(error).split()).removeprefix('Error: ')
-            raise SceneryError(f'{what} does not compile: {reason}') from None
+            raise SceneryError(f'{what} does not compile: {reason}',
+                               Reason.DOES_NOT_COMPILE) from None
 
     def _from_urdf(self, text, what, base_dir, package_resolver):
         try:
             description = load_urdf(text, base_dir=base_dir, package_resolver=package_resolver)
         except UrdfError as error:
-            raise SceneryError(f'{what}: {error}') from None
+            raise SceneryError(f'{what}: {error}', Reason.NOT_PARSEABLE) from None
         if not description.anchored:
             raise SceneryError(f'{what} must fix its root link {quoted(description.root_link)} '
-                               "to the link 'world' with a fixed joint", unsupported=True)
+                               "to the link 'world' with a fixed joint", NOT_STATIC)
         if description.joints:
             raise SceneryError(f'{what} has moving joints ({", ".join(description.joints)}); '
-                               'scenery is static', unsupported=True)
+                               'scenery is static', NOT_STATIC)
         if description.plugins:
-            raise SceneryError(f'{what} carries plugins; scenery is static', unsupported=True)
+            raise SceneryError(f'{what} carries plugins; scenery is static', NOT_STATIC)
         return (description.spec, description.root_position, description.root_orientation)
 
-    def _from_mjcf(self, root, text, what, base_dir):
+    def _from_mjcf(self, text, what, base_dir):
+        root = parse_xml(text.encode('utf-8'), what)
         if next(root.iter('include'), None) is not None:
             raise SceneryError(f'{what} has an <include>, which scenery files may not have',
-                               unsupported=True)
+                               NOT_STATIC)
         for element in root.iter():
             for attribute in ('file', 'meshdir', 'texturedir', 'assetdir'):
                 name = element.get(attribute)
                 if name is not None and not _inside(name, base_dir):
                     raise SceneryError(f'{what}: {attribute}={quoted(name)} of <{element.tag}> '
-                                       "lies outside the scenery's own folder")
+                                       "lies outside the scenery's own folder",
+                                       Reason.REFUSED_ASSET)
         try:
-            if base_dir is None:
-                spec = mujoco.MjSpec.from_string(text.decode('utf-8'))
-            else:
-                spec = mujoco.MjSpec.from_file(self.path)
+            spec = mujoco.MjSpec.from_string(text)
+            if base_dir is not None:
+                spec.modelfiledir = base_dir
         except Exception as error:
             reason = ' '.join(str(error).split()).removeprefix('Error: ')
-            raise SceneryError(f'{what} is not valid MJCF: {reason}') from None
+            raise SceneryError(f'{what} is not valid MJCF: {reason}',
+                               Reason.NOT_PARSEABLE) from None
         if spec.joints:
             raise SceneryError(f'{what} has joints ({len(spec.joints)}); scenery is static',
-                               unsupported=True)
+                               NOT_STATIC)
         return spec, (0.0, 0.0, 0.0), (1.0, 0.0, 0.0, 0.0)
 
     def attach(self, spec):
         """Add the obstacles to a world's spec, their names under SCENERY_PREFIX."""
         frame = spec.worldbody.add_frame(pos=self._position, quat=self._orientation)
         spec.attach(self._spec.copy(), frame=frame, prefix=SCENERY_PREFIX)
+
+
+def _read(reader, *arguments, **options):
+    """Return the RobotSource a reader of robot_files.py gives, refusing as SceneryError."""
+    try:
+        return reader(*arguments, **options)
+    except WorldError as error:
+        raise SceneryError(str(error), error.reason) from None
 
 
 def _inside(name, base_dir):

@@ -1,10 +1,12 @@
 """
 Spawn orders: a robot to spawn, checked and built into a Model before anything is attached.
 
-An order's robot is URDF or, with format 'mjcf', MJCF; both go the same way from here on.
+An order's robot is a text in one of the description formats (description_formats.py), as a
+RobotSource of robot_files.py gives it; every format goes the same way from here on.
 
 A world spawns a batch of orders with one recompile; each order is checked on its own first, so
-that a refused order changes nothing and leaves the others to spawn.
+that a refused order changes nothing and leaves the others to spawn. This is where an order is
+judged, once: its name, its pose and frame, its description; each refusal has its Reason.
 """
 
 from dataclasses import dataclass
@@ -13,27 +15,30 @@ import numpy as np
 
 from service_tutorial.sim import frames
 from service_tutorial.sim import validation
-from service_tutorial.sim.description import UrdfError
+from service_tutorial.sim.description_formats import FORMATS
 from service_tutorial.sim.model import Model
-from service_tutorial.sim.urdf.hardened_xml import MAX_MODEL_XML_BYTES
-from service_tutorial.sim.validation import DescriptionError
 from service_tutorial.sim.validation import quoted
+from service_tutorial.sim.validation import Reason
 from service_tutorial.sim.validation import WorldError
-
-FORMATS = ('urdf', 'mjcf')
 
 
 @dataclass(frozen=True)
 class SpawnOrder:
-    """One robot to spawn: its name, its URDF or MJCF, its pose in a frame, its mesh folder."""
+    """One robot to spawn: its name, its description, its pose in a frame, its mesh folder."""
 
     name: str
-    urdf_xml: object  # the robot's text, str or bytes: URDF, or MJCF by model_format
+    text: object  # the robot's description, str or bytes, in model_format
     position: tuple = (0.0, 0.0, 0.0)
     orientation: tuple = frames.IDENTITY_QUATERNION  # (w, x, y, z)
     reference_frame: str = ''  # '' or 'world', a model, 'model::link', or a model of the batch
-    base_dir: str = None  # where mesh paths relative to the URDF resolve
-    model_format: str = 'urdf'  # 'urdf' or 'mjcf' (sim/mjcf.py)
+    base_dir: str = None  # where relative mesh paths resolve
+    model_format: str = 'urdf'  # a name of description_formats.FORMATS
+
+    @classmethod
+    def of(cls, name, source, **placement):
+        """Return the order of a RobotSource (robot_files.py) under name, placed as given."""
+        return cls(name, source.text, base_dir=source.base_dir,
+                   model_format=source.model_format, **placement)
 
 
 def prepared_batch(orders, *, taken, frame_state, descriptions):
@@ -65,12 +70,16 @@ def prepared_model(order, *, taken, batch, frame_state, descriptions):
     """
     if order.model_format not in FORMATS:
         raise WorldError(f'format {quoted(str(order.model_format))} is none of '
-                         f'{", ".join(FORMATS)}')
+                         f'{", ".join(FORMATS)}', Reason.UNSUPPORTED_FORMAT)
     validation.check_model_name(order.name)
     if order.name in taken or order.name in batch:
-        raise WorldError(f'a model named {quoted(order.name)} already exists')
-    position = validation.position(order.position)
-    orientation = validation.unit_quaternion(order.orientation)
+        raise WorldError(f'a model named {quoted(order.name)} already exists',
+                         Reason.NAME_TAKEN)
+    try:
+        position = validation.position(order.position)
+        orientation = validation.unit_quaternion(order.orientation)
+    except WorldError as error:
+        raise WorldError(str(error), Reason.BAD_POSE) from None
     earlier = batch.get(order.reference_frame)
     if earlier is not None:  # not in the world yet: where it is about to stand
         frame_position, frame_orientation = earlier.spawn_position, earlier.spawn_orientation
@@ -79,10 +88,7 @@ def prepared_model(order, *, taken, batch, frame_state, descriptions):
         frame_position, frame_orientation = frame.position, frame.orientation
     world_position, world_orientation = frames.compose(
         frame_position, frame_orientation, position, orientation)
-    try:
-        description = descriptions.load(order.urdf_xml, order.base_dir, order.model_format)
-    except UrdfError as error:
-        raise DescriptionError(str(error)) from None
+    description = descriptions.load(order.text, order.base_dir, order.model_format)
     return Model(order.name, description, world_position, world_orientation)
 
 
@@ -97,12 +103,3 @@ def log_spawned(logger, models):
     for model in models:
         for note in model.description.notes:
             logger.warning("model '%s': %s", model.name, note)
-
-
-def read_urdf_file(path):
-    """Return the bytes of a URDF file, at most one more than the size limit, or refuse."""
-    try:
-        with open(path, 'rb') as urdf_file:
-            return urdf_file.read(MAX_MODEL_XML_BYTES + 1)
-    except OSError as error:
-        raise WorldError(f"cannot read URDF file '{path}': {error.strerror}") from None

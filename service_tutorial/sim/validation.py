@@ -1,5 +1,11 @@
-"""Checks of what callers hand the world, and WorldError, the refusal that names the cause."""
+"""
+Checks of what callers hand the world, and WorldError, the refusal that names the cause.
 
+Every refusal carries a Reason, so that the ROS side answers it in its own words (a standard
+Result code, the lesson's success and status_message) without judging the request again.
+"""
+
+import enum
 import math
 
 import numpy as np
@@ -15,12 +21,44 @@ HUGE_VELOCITY = 1e5
 HUGE_ACCELERATION = 1e10
 
 
+class Reason(enum.Enum):
+    """Why the world refuses a request."""
+
+    INVALID = 'a value out of range'
+    NO_WORLD = 'no world is loaded'
+    NO_SUCH_MODEL = 'no such model'
+    NAME_INVALID = 'the name is invalid'
+    NAME_TAKEN = 'the name is taken'
+    NAMESPACE_INVALID = 'the namespace is invalid'
+    UNKNOWN_FRAME = 'the reference frame is unknown'
+    BAD_POSE = 'the pose is invalid'
+    NO_RESOURCE = 'the file is not there, or not one a request may name'
+    UNSUPPORTED_FORMAT = 'the format is not one the world reads'
+    NOT_PARSEABLE = 'the text does not parse'
+    MISSING_ASSET = 'a file it names is missing'
+    REFUSED_ASSET = 'a file it names may not be read'
+    UNSUPPORTED_CONTENT = 'it holds what the world does not take there'
+    DOES_NOT_COMPILE = 'MuJoCo does not compile it'
+    CANNOT_SIMULATE = 'MuJoCo cannot simulate it'
+    MODEL_REFUSED = "one of a world's models is refused"
+
+
 class WorldError(ValueError):
-    """A request the world refuses; str(error) names the cause and the offending value."""
+    """A request the world refuses; str(error) names the cause and the value, reason says why."""
+
+    reason = Reason.INVALID
+
+    def __init__(self, message, reason=None):
+        """Refuse with message, for reason (the class's own if None)."""
+        super().__init__(message)
+        if reason is not None:
+            self.reason = reason
 
 
 class DescriptionError(WorldError):
     """A robot description the world refuses: it does not parse, or MuJoCo will not build it."""
+
+    reason = Reason.NOT_PARSEABLE
 
 
 class AssetError(DescriptionError):
@@ -28,8 +66,7 @@ class AssetError(DescriptionError):
 
     def __init__(self, message, *, missing=False):
         """Refuse with message; missing: the file is allowed but cannot be had."""
-        super().__init__(message)
-        self.missing = missing
+        super().__init__(message, Reason.MISSING_ASSET if missing else Reason.REFUSED_ASSET)
 
 
 def quoted(text):
@@ -104,21 +141,23 @@ def bounded(array, limit):
 def check_model_name(name):
     """Refuse a model name that could not serve as a frame, a prefix or a topic part."""
     if not isinstance(name, str) or not name:
-        raise WorldError('model name must not be empty')
+        raise WorldError('model name must not be empty', Reason.NAME_INVALID)
     shown = quoted(name)
+    problem = None
     if len(name) > MAX_MODEL_NAME_LENGTH:
-        raise WorldError(f'model name {shown} is longer than {MAX_MODEL_NAME_LENGTH} '
-                         'characters')
-    if SCOPE_SEPARATOR in name:
-        raise WorldError(f"model name {shown} must not contain '{SCOPE_SEPARATOR}'")
-    if '/' in name:
-        raise WorldError(f"model name {shown} must not contain '/'")
-    if any(character.isspace() for character in name):
-        raise WorldError(f'model name {shown} must not contain whitespace')
-    if not name.isprintable() or any(character in '"\'<>&\\' for character in name):
-        raise WorldError(f'model name {shown} contains a character that is not allowed')
-    if name in WORLD_FRAMES:
-        raise WorldError(f'model name {shown} is reserved for the world frame')
+        problem = f'is longer than {MAX_MODEL_NAME_LENGTH} characters'
+    elif SCOPE_SEPARATOR in name:
+        problem = f"must not contain '{SCOPE_SEPARATOR}'"
+    elif '/' in name:
+        problem = "must not contain '/'"
+    elif any(character.isspace() for character in name):
+        problem = 'must not contain whitespace'
+    elif not name.isprintable() or any(character in '"\'<>&\\' for character in name):
+        problem = 'contains a character that is not allowed'
+    elif name in WORLD_FRAMES:
+        problem = 'is reserved for the world frame'
+    if problem is not None:
+        raise WorldError(f'model name {shown} {problem}', Reason.NAME_INVALID)
 
 
 def non_negative_number(value, what):

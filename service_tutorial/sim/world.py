@@ -8,7 +8,6 @@ deleting one model leaves the state of every other model exactly as it was.
 
 import dataclasses
 import math
-import os
 import types
 
 import mujoco
@@ -25,18 +24,20 @@ from service_tutorial.sim.model import Model
 from service_tutorial.sim.recovery import Recovery
 from service_tutorial.sim.recovery import take_steps
 from service_tutorial.sim.scenery import Scenery
-from service_tutorial.sim.spawning import SpawnOrder
 from service_tutorial.sim.validation import DescriptionError
 from service_tutorial.sim.validation import quoted
+from service_tutorial.sim.validation import Reason
 from service_tutorial.sim.validation import WorldError
 
 # The world's log: one name for everything that happens to its models.
-_logger = core_logger('service_tutorial.world')
+WORLD_LOG = 'service_tutorial.world'
+# MuJoCo's warnings are the process's: one log for them, whichever world they come from.
+_mujoco_logger = core_logger(WORLD_LOG)
 
 
 def _log_mujoco_warning(message):
     if not message.startswith(attachment.EMPTY_PREFIX_WARNING):
-        _logger.warning('MuJoCo: %s', message)
+        _mujoco_logger.warning('MuJoCo: %s', message)
 
 
 def _route_mujoco_messages():
@@ -49,19 +50,20 @@ def _route_mujoco_messages():
 
 class World:
     """
-    A MuJoCo world with a ground plane into which URDF and MJCF robots are spawned and deleted.
+    A MuJoCo world with a ground plane into which robots are spawned and deleted.
 
     rebuild(), forward(), state_changed(), schedule_events(), schedule_event() and
     body_state() are there for the core's own pieces, recovery and plugins; nodes use the rest.
     """
 
     def __init__(self, *, timestep=0.002, gravity=(0.0, 0.0, -9.81), cmd_vel_timeout=0.5,
-                 package_resolver=None, scenery=None, background_rendering=False):
+                 package_resolver=None, scenery=None, background_rendering=False, logger=None):
         """
         Create a world without models, with the static obstacles of a scenery file if given.
 
         scenery: a path or a Scenery; package_resolver maps a package to its share folder, for
-        package:// meshes (none: refused); background_rendering draws cameras on a thread.
+        package:// meshes (none: refused); background_rendering draws cameras on a thread;
+        logger: where the world says what happens to its models (core_logger(WORLD_LOG)).
         """
         timestep = validation.finite_number(timestep, 'timestep')
         if timestep <= 0.0:
@@ -69,6 +71,7 @@ class World:
         gravity = validation.vector(gravity, 3, 'gravity')
         cmd_vel_timeout = validation.non_negative_number(cmd_vel_timeout, 'cmd_vel_timeout')
         _route_mujoco_messages()
+        self._logger = logger or core_logger(WORLD_LOG)
         self._timestep = timestep
         self._cmd_vel_timeout = cmd_vel_timeout
         self._paused = False
@@ -82,7 +85,7 @@ class World:
         self._spec = self._scene.spec()
         self._model = self._spec.compile()
         self._data = mujoco.MjData(self._model)
-        self._recovery = Recovery(self)
+        self._recovery = Recovery(self, self._logger)
         self.background_renders = BackgroundRenders() if background_rendering else None
         self.forward()
 
@@ -134,29 +137,14 @@ class World:
     def _spawned(self, name):
         model = self._models.get(name) if isinstance(name, str) else None
         if model is None:
-            raise WorldError(f'no model named {quoted(str(name))}')
+            raise WorldError(f'no model named {quoted(str(name))}', Reason.NO_SUCH_MODEL)
         return model
 
     # ---------------------------------------------------------------- spawn and delete
 
-    def spawn_urdf(self, name, urdf_xml, **placement):
+    def spawn(self, orders):
         """
-        Add a URDF robot, log its notes and return its Model; a refusal changes nothing.
-
-        placement: position, orientation, reference_frame and base_dir, as in a SpawnOrder.
-        """
-        return self.spawn(SpawnOrder(name, urdf_xml, **placement))
-
-    def spawn(self, order):
-        """Add the robot of a SpawnOrder, URDF or MJCF (sim/mjcf.py); return its Model or raise."""
-        outcome, = self.spawn_urdf_batch([order])
-        if isinstance(outcome, WorldError):
-            raise outcome
-        return outcome
-
-    def spawn_urdf_batch(self, orders):
-        """
-        Add the robots of several SpawnOrders, URDF or MJCF, with one recompile; log their notes.
+        Add the robots of SpawnOrders with one recompile; log where, and their notes.
 
         Return a Model or the WorldError that refused it, for each order in order. A refused
         order changes nothing and leaves the others to spawn. Should the batch not compile or
@@ -173,7 +161,7 @@ class World:
         spawned = [model for model in outcomes if isinstance(model, Model)]
         for model in spawned:
             model.reset_plugins()
-        spawning.log_spawned(_logger, spawned)
+        spawning.log_spawned(self._logger, spawned)
         self.schedule_events()
         return outcomes
 
@@ -188,7 +176,8 @@ class World:
         except attachment.CompileError as error:
             # The live spec still holds the half-attached robots: build it afresh without them.
             self.rebuild(self._models)
-            return DescriptionError(f"model '{first.name}' does not compile: {error}")
+            return DescriptionError(f"model '{first.name}' does not compile: {error}",
+                                    Reason.DOES_NOT_COMPILE)
         self._models.update(batch)
         for model in batch.values():
             model.mark_placed()
@@ -199,13 +188,8 @@ class World:
                           if name not in batch})
             return WorldError(f"model '{first.name}' cannot be simulated at "
                               f'{first.spawn_position.tolist()}: {failure}; does it overlap '
-                              'other models?')
+                              'other models?', Reason.CANNOT_SIMULATE)
         return None
-
-    def spawn_urdf_file(self, name, path, **placement):
-        """Add a robot from a URDF file and return its Model; meshes resolve by its folder."""
-        placement.setdefault('base_dir', os.path.dirname(os.path.abspath(path)))
-        return self.spawn_urdf(name, spawning.read_urdf_file(path), **placement)
 
     def delete_model(self, name):
         """Remove a model; every other model keeps its state."""
@@ -222,7 +206,7 @@ class World:
         self._after_recompile([self._models[later] for later in names[names.index(name) + 1:]])
         self.schedule_events()
         self.forward()
-        _logger.info("deleted model '%s'", name)
+        self._logger.info("deleted model '%s'", name)
 
     def load(self, scenery):
         """Take a new scenery (a Scenery or None) with no models, at time 0."""
@@ -259,7 +243,7 @@ class World:
             mujoco.mj_forward(self._model, self._data)
         except mujoco.FatalError as error:
             reason = str(error).splitlines()[0]
-            _logger.warning('MuJoCo: %s', reason)
+            self._logger.warning('MuJoCo: %s', reason)
             return reason
         self._kinematics_fresh = True  # mj_forward computed body_state()'s quantities too
         return None
@@ -294,7 +278,7 @@ class World:
                 steps_to_event = math.ceil((self._next_event - data.time) / self._timestep - 1e-6)
                 chunk = min(chunk, max(1, steps_to_event))
             self._recovery.start_chunk()
-            completed = take_steps(model, data, chunk)
+            completed = take_steps(model, data, chunk, logger=self._logger)
             remaining -= chunk
             if not (completed and self._recovery.state_is_sane()):
                 self._recovery.recover(chunk)

@@ -31,8 +31,8 @@ import mujoco
 import numpy as np
 from service_tutorial.sim.description import parse_numbers, UrdfError
 from service_tutorial.sim.package_files import confined_path, PackageFileError, within
-from service_tutorial.sim.urdf.hardened_xml import parse_xml
-from service_tutorial.sim.validation import check_model_name, quoted, WorldError
+from service_tutorial.sim.urdf.hardened_xml import MAX_MODEL_XML_BYTES, parse_xml
+from service_tutorial.sim.validation import check_model_name, quoted, Reason, WorldError
 
 # A world file is small: a few poses and models, never megabytes.
 MAX_WORLD_FILE_BYTES = 1 << 20
@@ -41,19 +41,15 @@ MAX_TEXT_LENGTH = 10000  # a description
 MAX_NAME_LENGTH = 256  # a world's, a pose's or a tag's
 MAX_COORDINATE = 1e6  # metres
 WORLD_FILE_SUFFIX = '.world.xml'
-
-# What went wrong, as LoadWorld's codes tell it apart.
-NO_RESOURCE = 'no resource'
-PARSE_ERROR = 'parse error'
-UNSUPPORTED_FORMAT = 'unsupported format'
+# Scenery files load as worlds of their own; other simulators' formats are named.
+SCENERY_ROOTS = ('robot', 'mujoco')
+OTHER_FORMATS = {'sdf': 'SDF', 'gazebo': 'SDF'}
 
 
 class WorldFileError(WorldError):
-    """A world file the world cannot load; kind: NO_RESOURCE, PARSE_ERROR, ..."""
+    """A world file the world cannot load; its reason says why (NOT_PARSEABLE if none)."""
 
-    def __init__(self, kind, message):
-        super().__init__(message)
-        self.kind = kind
+    reason = Reason.NOT_PARSEABLE
 
 
 @dataclass(frozen=True)
@@ -91,39 +87,66 @@ class WorldFile:
     models: tuple
     named_poses: dict = field(default_factory=dict)  # name -> NamedPose, in file order
     unsupported: tuple = ()  # elements the world does not know, as '<tag>'
+    scenery_text: str = ''  # a scenery given as text, in place of a file
 
 
-def read_world_file(path, package_share, *, shown=None):
-    """Return the WorldFile of a file (checked against the roots by its caller)."""
+def read_world_file(path, package_share, *, shown=None, scenery_alone=False):
+    """
+    Return the WorldFile of a file (checked against the roots by its caller).
+
+    scenery_alone: a URDF or MJCF file is a world of that scenery and nothing else.
+    """
     shown = quoted(shown or path)
+    limit = MAX_MODEL_XML_BYTES if scenery_alone else MAX_WORLD_FILE_BYTES
     try:
         with open(path, 'rb') as world_file:
-            data = world_file.read(MAX_WORLD_FILE_BYTES + 1)
+            data = world_file.read(limit + 1)
     except OSError as error:
-        raise WorldFileError(NO_RESOURCE, f'world file {shown} cannot be read: '
-                             f'{error.strerror}') from None
+        raise WorldFileError(f'world file {shown} cannot be read: {error.strerror}',
+                             Reason.NO_RESOURCE) from None
     name = os.path.basename(path)
     default_name = name[:-len(WORLD_FILE_SUFFIX)] if name.endswith(WORLD_FILE_SUFFIX) else \
         os.path.splitext(name)[0]
     return parse_world(data, f'world file {shown}', os.path.dirname(path), package_share,
-                       default_name=default_name)
+                       default_name=default_name, scenery_path=path if scenery_alone else None)
 
 
-def parse_world(data, what, base_dir, package_share, *, default_name='world'):
-    """Return the WorldFile of a world's XML (bytes); base_dir None: it names files by uri."""
+def parse_world(data, what, base_dir, package_share, *, default_name='world',
+                scenery_path=None, scenery_alone=False):
+    """
+    Return the WorldFile of a world's XML (bytes); base_dir None: it names files by uri.
+
+    scenery_path (a file's) or scenery_alone (a text's): URDF or MJCF is a world of that
+    scenery alone, read by the world's reader of robot files when the world is loaded.
+    """
     if isinstance(data, str):
         data = data.encode('utf-8')
-    if len(data) > MAX_WORLD_FILE_BYTES:
-        raise WorldFileError(PARSE_ERROR, f'{what} is larger than {MAX_WORLD_FILE_BYTES} bytes')
+    alone = scenery_alone or scenery_path is not None
+    limit = MAX_MODEL_XML_BYTES if alone else MAX_WORLD_FILE_BYTES
+    if len(data) > limit:
+        raise WorldFileError(f'{what} is larger than {limit} bytes')
     try:
         root = parse_xml(data, what)
     except UrdfError as error:
-        raise WorldFileError(PARSE_ERROR, str(error)) from None
+        raise WorldFileError(str(error)) from None
+    tag = root.tag if isinstance(root.tag, str) else ''
+    if alone and tag in SCENERY_ROOTS:
+        return WorldFile(name=default_name if scenery_path else 'scenery',
+                         description=f'the scenery {what} alone' if scenery_path
+                         else 'a scenery given as text', tags=(),
+                         scenery=scenery_path or '', models=(),
+                         scenery_text='' if scenery_path else data.decode('utf-8'))
+    if tag in OTHER_FORMATS:
+        raise WorldFileError(f'{what} is {OTHER_FORMATS[tag]} (root element <{tag}>); this '
+                             'world loads world files (<world>), URDF and MJCF',
+                             Reason.UNSUPPORTED_FORMAT)
+    if len(data) > MAX_WORLD_FILE_BYTES:
+        raise WorldFileError(f'{what} is larger than {MAX_WORLD_FILE_BYTES} bytes')
     reader = _Reader(what, base_dir, package_share)
     try:
         return reader.world(root, default_name)
     except UrdfError as error:  # parse_numbers' refusals
-        raise WorldFileError(PARSE_ERROR, f'{what}: {error}') from None
+        raise WorldFileError(f'{what}: {error}') from None
 
 
 class _Reader:
@@ -135,13 +158,13 @@ class _Reader:
         self.package_share = package_share
         self.unsupported = []
 
-    def fail(self, message, kind=PARSE_ERROR):
-        raise WorldFileError(kind, f'{self.what}: {message}')
+    def fail(self, message, reason=Reason.NOT_PARSEABLE):
+        raise WorldFileError(f'{self.what}: {message}', reason)
 
     def world(self, root, default_name):
         if root.tag != 'world':
             self.fail(f'the root element is <{str(root.tag)[:40]}>, not <world>',
-                      UNSUPPORTED_FORMAT)
+                      Reason.UNSUPPORTED_FORMAT)
         name = self.name(root.get('name') or default_name, 'world name')
         description, tags, scenery = '', [], ''
         models, poses = [], {}
@@ -194,15 +217,15 @@ class _Reader:
             if '://' in uri or self.base_dir is None:
                 return confined_path(uri, self.package_share)
         except PackageFileError as error:
-            self.fail(f'{what}: {error}', NO_RESOURCE)
+            self.fail(f'{what}: {error}', Reason.NO_RESOURCE)
         shown = quoted(uri)
         if os.path.isabs(uri) or '..' in uri.split('/') or '\0' in uri:
             self.fail(f"{what} names {shown}: a file of the world's own folder, or a "
-                      'package:// uri', NO_RESOURCE)
+                      'package:// uri', Reason.NO_RESOURCE)
         path = os.path.realpath(os.path.join(self.base_dir, uri))
         if not within(path, self.base_dir) or not os.path.isfile(path):
             self.fail(f"{what} names {shown}, which is no file in the world's folder",
-                      NO_RESOURCE)
+                      Reason.NO_RESOURCE)
         return path
 
     def named_pose(self, element):

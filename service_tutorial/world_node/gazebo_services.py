@@ -10,10 +10,14 @@ simulation time for as long as it takes, so that a real-time world does not jump
 from rclpy.parameter import Parameter
 from service_tutorial.conversions import fill_pose_msg, fill_twist_msg, pose_from_msg
 from service_tutorial.conversions import time_msg, twist_from_msg
-from service_tutorial.sim.validation import WorldError
+from service_tutorial.sim.robot_files import read_text
+from service_tutorial.sim.spawning import SpawnOrder
+from service_tutorial.world_node.answers import lesson_answer, raise_refusal
 from srv_interfaces.srv import DeleteModel, GetModelList, GetModelState, SetModelState
 from srv_interfaces.srv import SpawnModel
 from std_srvs.srv import Empty
+
+URDF_ONLY = ('urdf',)  # as Gazebo's spawn_urdf_model
 
 
 class GazeboServices:
@@ -43,22 +47,25 @@ class GazeboServices:
             SetModelState, '~/set_model_state', self.set_model_state_callback)
 
     def spawn_model_callback(self, request, response):
-        """Spawn a URDF model; failures are answered, never raised."""
+        """Spawn a URDF model as Gazebo's spawn_urdf_model; failures are answered, not raised."""
         def spawn():
+            robot = read_text(request.model_xml, 'model_xml', formats=URDF_ONLY)
             position, orientation = pose_from_msg(request.initial_pose)
-            left_out = self.node.spawn_model(request.model_name, request.model_xml,
-                                             request.robot_namespace, position, orientation,
-                                             request.reference_frame)
+            order = SpawnOrder.of(request.model_name, robot, position=position,
+                                  orientation=orientation,
+                                  reference_frame=request.reference_frame)
+            outcome, = self.node.spawn_models([order], [request.robot_namespace])
+            left_out = raise_refusal(outcome)
             answer = f'SpawnModel: Successfully spawned entity {request.model_name!r}'
             return f'{answer} ({left_out})' if left_out else answer
-        return self._answer('SpawnModel', self.node.holding_time(spawn), response)
+        return lesson_answer(self.node, 'SpawnModel', response, self.node.holding_time(spawn))
 
     def delete_model_callback(self, request, response):
         """Delete a model and its topics."""
         def delete():
             self.node.delete_model(request.model_name)
             return f'DeleteModel: Successfully deleted model {request.model_name!r}'
-        return self._answer('DeleteModel', self.node.holding_time(delete), response)
+        return lesson_answer(self.node, 'DeleteModel', response, self.node.holding_time(delete))
 
     def get_model_list_callback(self, request, response):
         """List every model in spawn order."""
@@ -76,7 +83,7 @@ class GazeboServices:
             fill_pose_msg(response.pose, state.position, state.orientation)
             fill_twist_msg(response.twist, state.linear_velocity, state.angular_velocity)
             return 'GetModelState: got properties'
-        return self._answer('GetModelState', get_state, response)
+        return lesson_answer(self.node, 'GetModelState', response, get_state)
 
     def set_model_state_callback(self, request, response):
         """Move a model to a pose and give it a twist."""
@@ -88,22 +95,7 @@ class GazeboServices:
                 linear_velocity=linear, angular_velocity=angular,
                 reference_frame=request.reference_frame)
             return f'SetModelState: set state of {request.model_name!r}'
-        return self._answer('SetModelState', set_state, response)
-
-    def _answer(self, service, operation, response):
-        """Run a world operation and report its outcome in success and status_message."""
-        try:
-            response.status_message = operation()
-            response.success = True
-        except WorldError as error:
-            response.success = False
-            response.status_message = f'{service}: {error}'
-            self.node.get_logger().warning(response.status_message)
-        except Exception as error:  # a bug must not take the world down with it
-            response.success = False
-            response.status_message = f'{service}: internal error: {error!r}'
-            self.node.get_logger().error(response.status_message)
-        return response
+        return lesson_answer(self.node, 'SetModelState', response, set_state)
 
     def reset_simulation_callback(self, request, response):
         """Put every model back at its spawn pose and the clock back to zero."""

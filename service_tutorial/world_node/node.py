@@ -21,7 +21,6 @@ effect as soon as it is set. What the simulation logs reaches the node's logger 
 
 import time
 
-from ament_index_python.packages import get_package_share_directory
 import rclpy
 from rclpy.clock import Clock as WallClock, ClockType
 from rclpy.event_handler import PublisherEventCallbacks
@@ -40,6 +39,7 @@ from service_tutorial.world_node.log_forwarding import forward_core_logs
 from service_tutorial.world_node.model_interface import ModelInterface
 from service_tutorial.world_node.pacing import CLOCK_STREAM, JOINT_STATES_STREAM
 from service_tutorial.world_node.pacing import heard_by_pacer, ODOMETRY_STREAM, Pacer
+from service_tutorial.world_node.packages import package_share
 from service_tutorial.world_node.parameters import declare_world_parameters, default_parameters
 from service_tutorial.world_node.parameters import run_or_exit
 from service_tutorial.world_node.requested_steps import RequestedSteps
@@ -80,7 +80,7 @@ def left_out_of(description):
 
 def robot_description(order):
     """Return the URDF a spawned model's robot_description carries; MJCF carries none."""
-    return order.urdf_xml if order.model_format == 'urdf' else None
+    return order.text if order.model_format == 'urdf' else None
 
 
 class MujocoWorld(Node):
@@ -116,11 +116,11 @@ class MujocoWorld(Node):
         from service_tutorial.world_node.standard.spawnables import SpawnableServices
         from service_tutorial.world_node.standard.worlds import WorldServices
         from service_tutorial.world_node.world_loader import resolve_model_path, WorldLoader
-        self.world_loader = WorldLoader(self, get_package_share_directory)
+        self.world_loader = WorldLoader(self, package_share)
         start_up = self.world_loader.start_up_world(parameters, default_parameters())
         self.world = World(timestep=parameters['timestep'],
                            cmd_vel_timeout=parameters['cmd_vel_timeout'],
-                           package_resolver=get_package_share_directory,
+                           package_resolver=package_share,
                            scenery=start_up and start_up.scenery,
                            background_rendering=True)  # a camera never holds up an answer
         self.pacer = Pacer(timestep=self.world.timestep,
@@ -154,7 +154,7 @@ class MujocoWorld(Node):
         self.stepping_services = SteppingServices(self, simulation)
         self.standard_groups = [
             simulation, self.stepping_services, EntityServices(self),
-            WorldServices(self, simulation, get_package_share_directory),
+            WorldServices(self, simulation, package_share),
             NamedPoseServices(self), SpawnableServices(self)]
         self.feature_service = FeatureService(self, self.standard_groups)
         # ~/camera/image_raw, ~/camera/camera_info (camera_enabled) and ~/save_snapshot.
@@ -289,34 +289,29 @@ class MujocoWorld(Node):
 
     # --- model services -----------------------------------------------------------------------
 
-    def spawn_model(self, name, urdf, namespace, position, orientation, reference_frame,
-                    base_dir=None):
-        """Add a model to the world and give it its ROS interface; return what was left out."""
-        # Refused before the world is asked: a bad namespace leaves the world untouched.
-        self.world_loader.check_loaded(f'spawning {quoted(name)}')
-        namespace = normalise_namespace(namespace)
-        model = self.world.spawn_urdf(name, urdf, position=position, orientation=orientation,
-                                      reference_frame=reference_frame, base_dir=base_dir)
-        self._give_interface(model, namespace, urdf)
-        self.viewer.reopen()
-        # The world's log has already named each of them, with the reason.
-        return left_out_of(model.description)
-
     def spawn_models(self, orders, namespaces):
         """
-        Add the models of several SpawnOrders with one recompile, each with its ROS interface.
+        Add the models of SpawnOrders with one recompile, each with its ROS interface.
 
-        namespaces: each model's normalised namespace. Return, for each order, what the world
-        left out of its model ('' for nothing) or the exception that refused it (a WorldError
-        unless a bug).
+        namespaces: each model's robot namespace, as asked. Return, for each order, what the
+        world left out of its model ('' for nothing) or the exception that refused it (a
+        WorldError with its reason, unless a bug).
         """
         self.world_loader.check_loaded('spawning')
-        outcomes = self.world.spawn_urdf_batch(orders)
-        for index, (order, namespace) in enumerate(zip(orders, namespaces)):
-            if not isinstance(outcomes[index], WorldError):
+        outcomes, ready = [None] * len(orders), []
+        for index, namespace in enumerate(namespaces):
+            try:  # refused before the world is asked: a bad namespace leaves it untouched
+                ready.append((index, normalise_namespace(namespace)))
+            except WorldError as error:
+                outcomes[index] = error
+        spawned = self.world.spawn([orders[index] for index, _ in ready])
+        for (index, namespace), model in zip(ready, spawned):
+            outcomes[index] = model
+            if not isinstance(model, WorldError):
                 try:
-                    self._give_interface(outcomes[index], namespace, robot_description(order))
-                    outcomes[index] = left_out_of(outcomes[index].description)
+                    self._give_interface(model, namespace, robot_description(orders[index]))
+                    # The world's log has already named each of them, with the reason.
+                    outcomes[index] = left_out_of(model.description)
                 except Exception as error:  # the model is gone again; the others go on
                     outcomes[index] = error
         self.viewer.reopen()

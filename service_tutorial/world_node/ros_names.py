@@ -3,6 +3,7 @@
 import re
 
 from service_tutorial.sim.validation import quoted
+from service_tutorial.sim.validation import Reason
 from service_tutorial.sim.validation import WorldError
 
 # Leaves room for the topic names under it within the DDS limit of about 250 characters.
@@ -21,11 +22,11 @@ def normalise_namespace(namespace):
             raise WorldError(f'robot namespace {quoted(namespace)} is not a valid ROS '
                              f'namespace: its part {quoted(token)} must start with a letter '
                              'or underscore and hold only ASCII letters, digits and '
-                             'underscores')
+                             'underscores', Reason.NAMESPACE_INVALID)
     normalised = '/' + '/'.join(tokens) if tokens else ''
     if len(normalised) > MAX_NAMESPACE_LENGTH:
         raise WorldError(f'robot namespace {quoted(namespace)} is longer than '
-                         f'{MAX_NAMESPACE_LENGTH} characters')
+                         f'{MAX_NAMESPACE_LENGTH} characters', Reason.NAMESPACE_INVALID)
     return normalised
 
 

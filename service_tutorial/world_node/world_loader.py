@@ -15,39 +15,35 @@ from dataclasses import dataclass, replace
 import logging
 import os
 
-from ament_index_python.packages import get_package_share_directory
-from ament_index_python.packages import get_packages_with_prefixes
 from rclpy.parameter import Parameter
-from service_tutorial.robot_files import file_model_name, read_robot_file, RobotFileError
 from service_tutorial.sim import frames
 from service_tutorial.sim.core_logs import core_logger
 from service_tutorial.sim.package_files import confined_path, PackageFileError
+from service_tutorial.sim.robot_files import file_model_name, read_path
 from service_tutorial.sim.scenery import Scenery, SceneryError
 from service_tutorial.sim.spawning import SpawnOrder
-from service_tutorial.sim.validation import quoted, WorldError
-from service_tutorial.sim.world_files import NO_RESOURCE, read_world_file, StartModel
+from service_tutorial.sim.validation import quoted, Reason, WorldError
+from service_tutorial.sim.world import World, WORLD_LOG
+from service_tutorial.sim.world_files import read_world_file, StartModel
 from service_tutorial.sim.world_files import WORLD_FILE_SUFFIX, WorldFileError
+from service_tutorial.world_node.packages import installed_shares, own_share, PACKAGE
 from service_tutorial.world_node.parameters import ParameterError
 from service_tutorial.world_node.ros_names import normalise_namespace
 
-PACKAGE = 'service_tutorial'
-WORLD_LOG = 'service_tutorial.world'  # sim/world.py's log
 WORLDS_FOLDER = 'worlds'
 # The world parameters that, set to anything but their default, replace the world's own.
 SCENERY_PARAMETER = 'scenery'
 MODEL_PARAMETERS = ('models', 'model_names', 'model_namespaces', 'model_poses')
-# What else went wrong loading a world, beside world_files' kinds.
-MISSING_ASSETS = 'missing assets'
-UNSUPPORTED_ASSETS = 'unsupported assets'
-MODEL_REFUSED = 'model refused'
 KEPT_SCENERIES = 8  # the sceneries of the last worlds loaded, kept read and checked
+# A trial world's spawns are not the world's: it says only what goes wrong.
+TRIAL_LOG = WORLD_LOG + '.trial'
 
 
 def resolve_model_path(model):
     """Find a model (URDF or xacro) or scenery file: an absolute path, or one in models/."""
     if os.path.isabs(model):
         return model
-    return os.path.join(get_package_share_directory(PACKAGE), 'models', model)
+    return os.path.join(own_share(), 'models', model)
 
 
 def parameter_models(parameters):
@@ -71,7 +67,6 @@ class LoadedWorld:
     world: object  # a WorldFile
     uri: str
     resource_string: str = ''
-    scenery_text: str = ''  # a scenery given as text, in place of the world's file
 
 
 @dataclass(frozen=True)
@@ -113,20 +108,16 @@ class WorldLoader:
         """Return the path of a world file by name: this package's worlds/ first, then any."""
         own = os.path.join(self.package_share(PACKAGE), WORLDS_FOLDER, name + WORLD_FILE_SUFFIX)
         if '/' in name or name in ('.', '..'):
-            raise WorldFileError(NO_RESOURCE, f'{quoted(name)} is no world name: give a name, '
-                                 'a package:// uri or an absolute path')
+            raise WorldFileError(f'{quoted(name)} is no world name: give a name, a package:// '
+                                 'uri or an absolute path', Reason.NO_RESOURCE)
         if os.path.isfile(own):
             return own
-        for package in sorted(get_packages_with_prefixes()):
-            try:
-                path = os.path.join(self.package_share(package), WORLDS_FOLDER,
-                                    name + WORLD_FILE_SUFFIX)
-            except Exception:  # noqa: B902 a package the index names but cannot place
-                continue
+        for share in installed_shares().values():
+            path = os.path.join(share, WORLDS_FOLDER, name + WORLD_FILE_SUFFIX)
             if os.path.isfile(path):
                 return path
-        raise WorldFileError(NO_RESOURCE, f'no world named {quoted(name)} in the worlds/ '
-                             'folder of any installed package')
+        raise WorldFileError(f'no world named {quoted(name)} in the worlds/ folder of any '
+                             'installed package', Reason.NO_RESOURCE)
 
     def start_up_world(self, parameters, defaults):
         """
@@ -188,21 +179,23 @@ class WorldLoader:
         """
         world = loaded.world
         scenery = None
-        if loaded.scenery_text:
-            scenery = Scenery.from_text(loaded.scenery_text, 'resource_string',
+        if world.scenery_text:
+            scenery = Scenery.from_text(world.scenery_text, 'resource_string',
                                         package_resolver=self.package_share)
         elif world.scenery:
             scenery = self._scenery(world.scenery)
         orders, namespaces = [], []
         for model in world.models:
             try:
-                robot = read_robot_file(model.path)
+                robot = read_path(model.path)
                 namespaces.append(normalise_namespace(model.namespace))
-            except RobotFileError as error:
-                raise WorldFileError(MISSING_ASSETS, str(error)) from None
-            orders.append(SpawnOrder(model.name or file_model_name(model.path), robot.urdf,
-                                     position=model.position, orientation=model.orientation,
-                                     base_dir=robot.base_dir))
+            except WorldError as error:  # a file the world names and cannot have is an asset
+                raise WorldFileError(str(error), Reason.MISSING_ASSET
+                                     if error.reason == Reason.NO_RESOURCE else error.reason) \
+                    from None
+            orders.append(SpawnOrder.of(model.name or file_model_name(model.path), robot,
+                                        position=model.position,
+                                        orientation=model.orientation))
         tried = (scenery, tuple(orders))  # the same files and poses spawn the same way
         if trial and tried not in self._tried:
             refused = [(order.name, outcome) for order, outcome
@@ -210,8 +203,8 @@ class WorldLoader:
                        if isinstance(outcome, WorldError)]
             if refused:
                 name, error = refused[0]
-                raise WorldFileError(MODEL_REFUSED, f'world {quoted(world.name)} cannot spawn '
-                                     f'its model {quoted(name)}: {error}')
+                raise WorldFileError(f'world {quoted(world.name)} cannot spawn its model '
+                                     f'{quoted(name)}: {error}', Reason.MODEL_REFUSED)
             self._tried = (self._tried | {tried}) if len(self._tried) < KEPT_SCENERIES \
                 else {tried}
         return PreparedWorld(loaded, scenery, tuple(orders), tuple(namespaces))
@@ -221,8 +214,8 @@ class WorldLoader:
         try:
             stat = os.stat(path)
         except OSError as error:
-            raise SceneryError(f'cannot read scenery file {quoted(path)}: {error.strerror}') \
-                from None
+            raise SceneryError(f'cannot read scenery file {quoted(path)}: {error.strerror}',
+                               Reason.MISSING_ASSET) from None
         kept = self._sceneries.pop(path, None)
         if kept is None or kept[:2] != (stat.st_mtime_ns, stat.st_size):
             kept = (stat.st_mtime_ns, stat.st_size,
@@ -234,19 +227,13 @@ class WorldLoader:
 
     def _trial(self, scenery, orders):
         """Return what spawning orders into a world with scenery gives, said quietly."""
-        from service_tutorial.sim.world import World
-        world_log = core_logger(WORLD_LOG)
-        level = world_log.level
-        world_log.setLevel(logging.WARNING)  # the trial's spawns are not the world's
-        try:
-            if self._trial_world is None:  # kept: it builds each robot file once
-                parameters = self.node.parameters
-                self._trial_world = World(timestep=parameters['timestep'],
-                                          package_resolver=self.package_share)
-            self._trial_world.load(scenery)
-            return self._trial_world.spawn_urdf_batch(orders)
-        finally:
-            world_log.setLevel(level)
+        if self._trial_world is None:  # kept: it builds each robot file once
+            trial_log = core_logger(TRIAL_LOG)
+            trial_log.setLevel(logging.WARNING)
+            self._trial_world = World(timestep=self.node.parameters['timestep'],
+                                      package_resolver=self.package_share, logger=trial_log)
+        self._trial_world.load(scenery)
+        return self._trial_world.spawn(orders)
 
     def load(self, prepared):
         """Replace the world: every entity goes, the prepared scenery and models come."""
@@ -284,7 +271,8 @@ class WorldLoader:
     def check_loaded(self, what):
         """Refuse what (a spawn...) with WorldError in the no-world state."""
         if self.current is None:
-            raise WorldError(f'no world is loaded: {what} waits for a world (LoadWorld)')
+            raise WorldError(f'no world is loaded: {what} waits for a world (LoadWorld)',
+                             Reason.NO_WORLD)
 
     def _clear(self):
         """Stop any stepping and destroy every model's topics; World.load() drops the models."""
@@ -299,4 +287,4 @@ def path_of_uri(uri, package_share):
     try:
         return confined_path(uri, package_share)
     except PackageFileError as error:
-        raise WorldFileError(NO_RESOURCE, str(error)) from None
+        raise WorldFileError(str(error), Reason.NO_RESOURCE) from None

@@ -15,7 +15,7 @@ from repository import ROOT
 
 PACKAGE = os.path.join(ROOT, 'service_tutorial')
 MAX_FILE_LINES = 500
-MAX_CLASS_LINES = 350
+MAX_CLASS_LINES = 500
 # What belongs to ROS, by a module's top-level package: client libraries, interfaces, tools.
 ROS_MODULES = ('rclpy', 'rcl_interfaces', 'srv_interfaces', 'rosidl_runtime_py', 'rmw',
                'rpyutils', 'tf2_ros', 'message_filters')
@@ -179,7 +179,7 @@ def test_no_file_is_longer_than_500_lines():
     assert not too_long, f'over {MAX_FILE_LINES} lines:\n' + '\n'.join(too_long)
 
 
-def test_no_class_is_longer_than_350_lines():
+def test_no_class_is_longer_than_500_lines():
     too_long = []
     for path in python_files(PACKAGE):
         for node in ast.walk(parse(path)):

@@ -14,6 +14,7 @@ from service_tutorial.pictures.trajectory_plot import write_trajectory_plot
 from service_tutorial.sim import frames
 from service_tutorial.sim.rendering import SceneCamera
 from service_tutorial.sim.world import World
+from spawns import spawn_file
 
 
 # --- PNG ------------------------------------------------------------------------------------
@@ -128,9 +129,9 @@ def test_animation_decodes_to_the_frames(tmp_path):
 
 def test_animation_of_rendered_frames(tmp_path):
     world = World()
-    world.spawn_urdf_file('tinybot', TINYBOT)
-    world.spawn_urdf_file('r2d2', R2D2, position=(-2.0, 1.0, 1.0),
-                          orientation=frames.yaw_quaternion(-math.pi / 2))
+    spawn_file(world, 'tinybot', TINYBOT)
+    spawn_file(world, 'r2d2', R2D2, position=(-2.0, 1.0, 1.0),
+               orientation=frames.yaw_quaternion(-math.pi / 2))
     camera = SceneCamera(480, 360, (1.0, -1.8, 1.3), (-0.9, 0.4, 0.55), 55.0)  # the lesson's view
     rendered = []
     try:

@@ -7,6 +7,7 @@ import time
 from repository import model_path, TEST_MODELS
 from service_tutorial.sim.plugins.camera_sensor import CameraSensor
 from service_tutorial.sim.world import World
+from spawns import spawn_file, spawn_robot
 
 CAMERA_ROBOT = model_path('sensor_camera', TEST_MODELS)  # 160x120 at 10 Hz
 RED_BOX = model_path('props/red_box', TEST_MODELS)
@@ -25,8 +26,8 @@ def delivered(world, frames, count, timeout=30.0):
 
 def test_the_steps_go_on_while_a_frame_is_drawn_and_it_comes_stamped_with_its_snapshot(caplog):
     world = World(background_rendering=True)
-    world.spawn_urdf_file('camera_post', CAMERA_ROBOT)
-    world.spawn_urdf_file('box', RED_BOX, position=(1.5, 0.0, 0.0))
+    spawn_file(world, 'camera_post', CAMERA_ROBOT)
+    spawn_file(world, 'box', RED_BOX, position=(1.5, 0.0, 0.0))
     camera = world.models['camera_post'].plugin(CameraSensor)
     # The rendering thread draws the first frame only once the test lets it.
     drawing, go_on = threading.Event(), threading.Event()
@@ -73,7 +74,7 @@ def test_the_steps_go_on_while_a_frame_is_drawn_and_it_comes_stamped_with_its_sn
 
 def test_a_frame_of_a_camera_nobody_listens_to_any_more_is_dropped():
     world = World(background_rendering=True)
-    world.spawn_urdf_file('camera_post', CAMERA_ROBOT)
+    spawn_file(world, 'camera_post', CAMERA_ROBOT)
     camera = world.models['camera_post'].plugin(CameraSensor)
     frames = []
     camera.listener = frames.append
@@ -94,11 +95,11 @@ def test_a_frame_of_a_camera_nobody_listens_to_any_more_is_dropped():
 
 def test_cameras_of_two_sizes_share_the_rendering_thread_and_see_each_new_model():
     world = World(background_rendering=True)
-    world.spawn_urdf_file('small_post', CAMERA_ROBOT)
+    spawn_file(world, 'small_post', CAMERA_ROBOT)
     with open(CAMERA_ROBOT) as robot_file:
         larger = robot_file.read().replace('<width>160</width>', '<width>640</width>') \
             .replace('<height>120</height>', '<height>480</height>')
-    world.spawn_urdf('large_post', larger, position=(0.0, 0.0, 0.0))
+    spawn_robot(world, 'large_post', larger, position=(0.0, 0.0, 0.0))
     cameras = [world.models[name].plugin(CameraSensor) for name in ('small_post', 'large_post')]
     frames = {camera: [] for camera in cameras}
     for camera in cameras:
@@ -124,7 +125,7 @@ def test_cameras_of_two_sizes_share_the_rendering_thread_and_see_each_new_model(
             camera.set_active(True)
         assert centre_is_red() == [False, False]
         # Each spawn and delete compiles a new model; both cameras draw it at their own size.
-        world.spawn_urdf_file('box', RED_BOX, position=(1.5, 0.0, 0.0))
+        spawn_file(world, 'box', RED_BOX, position=(1.5, 0.0, 0.0))
         assert centre_is_red() == [True, True]
         world.delete_model('box')
         assert centre_is_red() == [False, False]

@@ -9,6 +9,7 @@ from service_tutorial.sim import bounds
 from service_tutorial.sim.bounds import OrientedBoxes
 from service_tutorial.sim.urdf.builder import load_urdf
 from service_tutorial.sim.world import World
+from spawns import spawn_file, spawn_robot
 
 
 def one_box(centre, rotation, half_sizes):
@@ -26,8 +27,8 @@ def yaw_matrix(angle):
 
 def test_tinybot_bounds_are_its_urdf_collision_sizes_in_its_base_frame():
     world = World()
-    world.spawn_urdf_file('tinybot', TINYBOT, position=(1.0, 2.0, 0.0),
-                          orientation=(np.cos(0.4), 0.0, 0.0, np.sin(0.4)))
+    spawn_file(world, 'tinybot', TINYBOT, position=(1.0, 2.0, 0.0),
+               orientation=(np.cos(0.4), 0.0, 0.0, np.sin(0.4)))
     lower, upper = bounds.box_in_base_frame(world, world.models['tinybot'])
     # Chassis cylinder r 0.085 from z 0.043 to 0.093; wheels r 0.033 at y +-0.1, z 0.033.
     assert np.allclose(lower, (-0.085, -0.133, 0.0), atol=1e-6)
@@ -40,12 +41,12 @@ def test_a_description_compiled_alone_has_the_box_its_spawn_has(name, folder):
     """The box GetSpawnables offers is the one GetEntityBounds gives once spawned."""
     urdf = read_model(name, folder)
     world = World()
-    world.spawn_urdf('other', read_model('r2d2'), position=(4.0, 0.0, 0.0))
+    spawn_robot(world, 'other', read_model('r2d2'), position=(4.0, 0.0, 0.0))
     model_before = world.model
     lower, upper = bounds.description_box(load_urdf(urdf))
     assert world.model is model_before and list(world.models) == ['other']
-    world.spawn_urdf(name, urdf, position=(1.0, -2.0, 0.3),
-                     orientation=(np.cos(0.3), 0.0, 0.0, np.sin(0.3)))
+    spawn_robot(world, name, urdf, position=(1.0, -2.0, 0.3),
+                orientation=(np.cos(0.3), 0.0, 0.0, np.sin(0.3)))
     spawned_lower, spawned_upper = bounds.box_in_base_frame(world, world.models[name])
     assert np.allclose(lower, spawned_lower, atol=1e-9)
     assert np.allclose(upper, spawned_upper, atol=1e-9)
@@ -53,7 +54,7 @@ def test_a_description_compiled_alone_has_the_box_its_spawn_has(name, folder):
 
 def test_the_boxes_of_a_model_follow_it():
     world = World()
-    world.spawn_urdf_file('tinybot', TINYBOT, position=(3.0, 0.0, 0.0))
+    spawn_file(world, 'tinybot', TINYBOT, position=(3.0, 0.0, 0.0))
     boxes = bounds.collision_boxes(world, world.models['tinybot'])
     assert len(boxes) == 4  # chassis, two wheels, caster
     assert bounds.overlaps_sphere(boxes, (3.0, 0.0, 0.05), 0.01)

@@ -16,6 +16,7 @@ from service_tutorial.sim.plugins.skid_steer import SkidSteer
 from service_tutorial.sim.urdf.builder import load_urdf
 from service_tutorial.sim.validation import WorldError
 from service_tutorial.sim.world import World
+from spawns import spawn_robot
 from worlds import drive_and_stop, settled_world
 
 DIFF_DRIVES = ('diffbot_ros1', 'diffbot_ros2', 'pairbot_ros2')
@@ -263,7 +264,7 @@ def test_the_wheels_never_push_harder_than_the_torque_limit():
     urdf = read_model('diffbot_ros2', TEST_MODELS).replace(
         '<max_wheel_torque>2</max_wheel_torque>', '<max_wheel_torque>0.05</max_wheel_torque>')
     world = World()
-    world.spawn_urdf('weak', urdf)
+    spawn_robot(world, 'weak', urdf)
     world.step(250)
     forces = []
     for _ in range(100):

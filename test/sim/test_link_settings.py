@@ -10,6 +10,7 @@ from service_tutorial.sim.description import UrdfError
 from service_tutorial.sim.urdf import builder
 from service_tutorial.sim.urdf.builder import load_urdf
 from service_tutorial.sim.world import World
+from spawns import spawn_file, spawn_robot
 
 LINKBOT = model_path('linkbot', TEST_MODELS)
 LINKBOT_MASS = 2.0 + 0.2 + 0.01 + 0.05
@@ -93,7 +94,7 @@ def flaps(left, right):
     ('false', 'false', False), ('true', 'false', False), ('true', 'true', True)])
 def test_links_of_one_robot_collide_only_if_both_say_self_collide(left, right, collide):
     world = World()
-    world.spawn_urdf('flaps', flaps(left, right), position=(0.0, 0.0, 0.05))
+    spawn_robot(world, 'flaps', flaps(left, right), position=(0.0, 0.0, 0.05))
     world.step(1)
     mj_model, data = world.model, world.data
     pairs = {frozenset(mj_model.body(mj_model.geom_bodyid[geom]).name
@@ -140,14 +141,14 @@ def touching_links(world, name):
 def test_overlapping_links_of_one_robot_never_touch_however_they_are_joined(anchored,
                                                                             excludes):
     world = World()
-    world.spawn_urdf('knot', knot(anchored), position=(0.0, 0.0, 0.3))
+    spawn_robot(world, 'knot', knot(anchored), position=(0.0, 0.0, 0.3))
     world.step(1)
     assert touching_links(world, 'knot') == set()
     # MuJoCo keeps apart links fixed to each other and a joint's two sides itself (not when
     # one side is fixed to the world): only the other pairs of the 15 need an exclude.
     assert world.model.nexclude == excludes
     # The same links, told to collide, touch wherever MuJoCo does not keep them apart.
-    world.spawn_urdf('loose', knot(anchored, 'true'), position=(2.0, 0.0, 0.3))
+    spawn_robot(world, 'loose', knot(anchored, 'true'), position=(2.0, 0.0, 0.3))
     world.step(1)
     touching = touching_links(world, 'loose')
     assert {frozenset({'arm', 'thumb'}), frozenset({'finger', 'base'})} <= touching
@@ -156,8 +157,8 @@ def test_overlapping_links_of_one_robot_never_touch_however_they_are_joined(anch
 def test_a_link_without_gravity_floats_and_one_with_it_falls():
     for gravity, angle in (('false', 0.0), ('true', -math.pi / 2.0)):
         world = World()
-        world.spawn_urdf('linkbot', read_linkbot().replace('<gravity>false</gravity>',
-                                                           f'<gravity>{gravity}</gravity>'))
+        spawn_robot(world, 'linkbot', read_linkbot().replace('<gravity>false</gravity>',
+                                                             f'<gravity>{gravity}</gravity>'))
         world.step(2000)
         _, positions, _ = world.joint_state('linkbot')
         # Held out along +y on a hinge about x, the balloon hangs straight down if it weighs.
@@ -188,7 +189,7 @@ def test_bad_link_settings_are_refused_by_link_tag_and_value(tags, message):
 def test_plugins_not_simulated_here_are_named_once_in_order_and_logged_once(caplog):
     world = World()
     with caplog.at_level(logging.WARNING, logger='service_tutorial.world'):
-        model = world.spawn_urdf_file('linkbot', LINKBOT)
+        model = spawn_file(world, 'linkbot', LINKBOT)
         world.step(100)
         world.reset_world()
     assert model is world.models['linkbot']

@@ -12,6 +12,7 @@ from repository import model_path, TEST_MODELS
 from service_tutorial.sim.urdf import builder
 from service_tutorial.sim.urdf.builder import load_urdf
 from service_tutorial.sim.world import World
+from spawns import spawn_file, spawn_robot
 
 MESHES = os.path.join(TEST_MODELS, 'meshes')
 HALF_BOX = np.array([0.05, 0.03, 0.02])  # every box mesh file is 0.1 x 0.06 x 0.04 m
@@ -50,7 +51,7 @@ def link_bounds(world, model_name, link, group):
 
 def test_every_format_of_meshbot_has_its_size_scale_and_unit():
     world = World()
-    model = world.spawn_urdf_file('meshbot', model_path('meshbot', TEST_MODELS))
+    model = spawn_file(world, 'meshbot', model_path('meshbot', TEST_MODELS))
     assert model.description.missing_meshes == () and model.description.notes == ()
     expected = [
         ('base_link', builder.VISUAL_GROUP, HALF_BOX),  # ASCII STL
@@ -76,8 +77,8 @@ def test_every_format_of_meshbot_has_its_size_scale_and_unit():
                                         ('collision', builder.COLLISION_GROUP)])
 def test_each_format_loads_with_its_scale(filename, unit, tag, group):
     world = World()
-    world.spawn_urdf('meshy', mesh_robot((f'meshes/{filename}', '1.5 2 -0.5'), tag=tag),
-                     base_dir=TEST_MODELS)
+    spawn_robot(world, 'meshy', mesh_robot((f'meshes/{filename}', '1.5 2 -0.5'), tag=tag),
+                base_dir=TEST_MODELS)
     low, high = link_bounds(world, 'meshy', 'base', group)
     half = HALF_BOX * [1.5, 2.0, 0.5] * (unit / 0.01 if filename.endswith('.dae') else 1.0)
     np.testing.assert_allclose(low, -half, atol=1e-6)
@@ -93,7 +94,7 @@ def test_a_collada_unit_is_applied_and_metres_are_the_default(tmp_path, unit, ha
     (tmp_path / 'box.dae').write_text(
         text.replace('<unit name="centimeter" meter="0.01"/>', unit))
     world = World()
-    world.spawn_urdf('meshy', mesh_robot(('box.dae', None)), base_dir=str(tmp_path))
+    spawn_robot(world, 'meshy', mesh_robot(('box.dae', None)), base_dir=str(tmp_path))
     low, high = link_bounds(world, 'meshy', 'base', builder.VISUAL_GROUP)
     np.testing.assert_allclose(high - low, 2.0 * half, rtol=1e-6)
 
@@ -143,7 +144,7 @@ def test_an_unreadable_mesh_is_left_out_and_the_rest_is_built(tmp_path, filename
 def test_missing_meshes_are_named_once_in_order_and_the_robot_is_built(caplog):
     world = World()
     with caplog.at_level('WARNING', logger='service_tutorial.world'):
-        model = world.spawn_urdf_file('missingbot', model_path('missingbot', TEST_MODELS))
+        model = spawn_file(world, 'missingbot', model_path('missingbot', TEST_MODELS))
         world.step(100)
     assert model.description.missing_meshes == ('meshes/not_there.stl',
                                                 'package://no_such_package/meshes/arm.dae')
@@ -200,12 +201,14 @@ def test_pycollada_is_imported_only_for_a_collada_mesh():
     stl_robot = mesh_robot(('meshes/box_binary.stl', None))
     program = (
         'import sys\n'
+        f'sys.path.insert(0, {os.path.dirname(os.path.dirname(__file__))!r})\n'
         'from service_tutorial.sim.world import World\n'
+        'from spawns import spawn_file, spawn_robot\n'
         'world = World()\n'
-        f'world.spawn_urdf_file("diffbot", {model_path("diffbot_ros2", TEST_MODELS)!r})\n'
-        f'world.spawn_urdf("stl", {stl_robot!r}, base_dir={TEST_MODELS!r})\n'
+        f'spawn_file(world, "diffbot", {model_path("diffbot_ros2", TEST_MODELS)!r})\n'
+        f'spawn_robot(world, "stl", {stl_robot!r}, base_dir={TEST_MODELS!r})\n'
         'assert "collada" not in sys.modules\n'
-        f'world.spawn_urdf_file("meshbot", {model_path("meshbot", TEST_MODELS)!r})\n'
+        f'spawn_file(world, "meshbot", {model_path("meshbot", TEST_MODELS)!r})\n'
         'assert "collada" in sys.modules\n')
     result = subprocess.run([sys.executable, '-c', program], capture_output=True, text=True,
                             timeout=120)

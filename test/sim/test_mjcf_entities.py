@@ -11,8 +11,9 @@ from repository import MJCF_ARM, MJCF_CRATE, read_file, TEST_MODELS, TINYBOT
 from service_tutorial.sim import bounds
 from service_tutorial.sim.plugins.joint_state_publisher import JointStatePublisher
 from service_tutorial.sim.spawning import SpawnOrder
-from service_tutorial.sim.validation import AssetError, DescriptionError
+from service_tutorial.sim.validation import AssetError, DescriptionError, Reason
 from service_tutorial.sim.world import World
+from spawns import spawn_file, spawn_robot
 from test_spawn_and_delete import contents
 
 CRATE = read_file(MJCF_CRATE)
@@ -27,7 +28,7 @@ def run(world, seconds):
 
 def spawn_mjcf(world, name, text, **placement):
     """Spawn an MJCF entity into a world and return its Model, or raise why not."""
-    return world.spawn(SpawnOrder(name, text, model_format='mjcf', **placement))
+    return spawn_robot(world, name, text, model_format='mjcf', **placement)
 
 
 def mjcf(body, *, sections=''):
@@ -108,7 +109,7 @@ def test_an_mjcf_pendulum_hinged_to_the_world_swings_where_it_was_spawned():
 def test_an_mjcf_entity_spawned_and_deleted_leaves_tinybot_its_state_and_no_trace():
     world, fresh = World(), World()
     for one in (world, fresh):
-        one.spawn_urdf_file('tinybot', TINYBOT, position=(2.0, 0.0, 0.0))
+        spawn_file(one, 'tinybot', TINYBOT, position=(2.0, 0.0, 0.0))
     tinybot = world.models['tinybot']
     tinybot.drive().command_velocity(0.2, 0.5)
     run(world, 0.5)
@@ -167,7 +168,7 @@ def test_mesh_files_are_read_from_the_mjcf_folder_and_nowhere_else(tmp_path):
         with pytest.raises(AssetError, match=message) as refusal:
             spawn_mjcf(world, 'intruder', text.replace('box.obj', filename),
                        base_dir=str(folder))
-        assert refusal.value.missing is missing
+        assert refusal.value.reason == (Reason.MISSING_ASSET if missing else Reason.REFUSED_ASSET)
     assert contents(world) == before
 
 
@@ -226,7 +227,7 @@ HOSTILE_MJCF = [
 def test_hostile_mjcf_is_refused_naming_the_value_and_changes_nothing(what, text, refusal,
                                                                       message):
     world = World()
-    world.spawn_urdf_file('tinybot', TINYBOT)
+    spawn_file(world, 'tinybot', TINYBOT)
     run(world, 0.2)
     before, kept = contents(world), world.models['tinybot'].saved_state(world.data)
     with pytest.raises(refusal, match=message.replace('(', r'\(').replace(')', r'\)')):
@@ -240,7 +241,7 @@ def test_a_urdf_joint_state_publisher_block_names_the_joints_it_publishes():
     block = ('<gazebo><plugin name="joints" filename="libgazebo_ros_joint_state_publisher.so">'
              '<joint_name>wheel_right_joint</joint_name></plugin></gazebo></robot>')
     world = World()
-    tinybot = world.spawn_urdf('tinybot', read_file(TINYBOT).replace('</robot>', block))
+    tinybot = spawn_robot(world, 'tinybot', read_file(TINYBOT).replace('</robot>', block))
     publisher = tinybot.plugin(JointStatePublisher)
     run(world, 0.1)
     names, positions, velocities = publisher.joint_state()
@@ -248,7 +249,7 @@ def test_a_urdf_joint_state_publisher_block_names_the_joints_it_publishes():
     assert not tinybot.description.ignored_plugins
     with pytest.raises(DescriptionError, match="names joint 'caster_joint', which is not a "
                                                'moving joint of the robot'):
-        world.spawn_urdf('other', read_file(TINYBOT).replace('</robot>', block.replace(
+        spawn_robot(world, 'other', read_file(TINYBOT).replace('</robot>', block.replace(
             'wheel_right_joint', 'caster_joint')), position=(2.0, 0.0, 0.0))
 
 
@@ -262,7 +263,7 @@ def test_a_batch_mixing_mjcf_and_urdf_spawns_with_one_recompile_and_comes_to_res
                               model_format='mjcf'),
                    SpawnOrder(f'crate{index}', CRATE, position=(index, 2.0, 1.0),
                               model_format='mjcf')]
-    outcomes = world.spawn_urdf_batch(orders)
+    outcomes = world.spawn(orders)
     assert [model.name for model in outcomes] == [order.name for order in orders]
     run(world, 2.0)
     for index in range(3):

@@ -13,6 +13,7 @@ from service_tutorial.sim.urdf.gazebo import read_plugin_blocks
 from service_tutorial.sim.urdf.hardened_xml import parse_model_xml
 from service_tutorial.sim.validation import WorldError
 from service_tutorial.sim.world import World
+from spawns import spawn_file, spawn_robot
 
 
 class TickPlugin(Plugin):
@@ -108,7 +109,7 @@ def test_plugin_blocks_are_kept_as_written():
 
 def test_a_new_plugin_kind_is_driven_by_the_world_without_touching_it(tick_kind):
     world = World()
-    world.spawn_urdf('ticker', ticking_robot(0.05), position=(1.0, 0.0, 0.05))
+    spawn_robot(world, 'ticker', ticking_robot(0.05), position=(1.0, 0.0, 0.05))
     (tick,) = world.models['ticker'].plugins
     assert isinstance(tick, TickPlugin) and tick.config == 0.05
     assert world.model.site('ticker::tick_site').id == tick.binds[-1]
@@ -116,7 +117,7 @@ def test_a_new_plugin_kind_is_driven_by_the_world_without_touching_it(tick_kind)
     world.step(100)
     # The world stops its steps at each event: the ticks fall on the period exactly.
     assert tick.ticks == [0.05, 0.1, 0.15, 0.2]
-    world.spawn_urdf_file('tinybot', TINYBOT)
+    spawn_file(world, 'tinybot', TINYBOT)
     # A model spawned later comes after the ticker's elements, which keep their ids.
     assert len(tick.binds) == 1
     assert world.model.site('ticker::tick_site').id == tick.binds[-1]
@@ -128,8 +129,8 @@ def test_a_new_plugin_kind_is_driven_by_the_world_without_touching_it(tick_kind)
 
 def test_a_plugin_is_bound_again_when_its_elements_move(tick_kind):
     world = World()
-    world.spawn_urdf_file('tinybot', TINYBOT)
-    world.spawn_urdf('ticker', ticking_robot(0.05), position=(1.0, 0.0, 0.05))
+    spawn_file(world, 'tinybot', TINYBOT)
+    spawn_robot(world, 'ticker', ticking_robot(0.05), position=(1.0, 0.0, 0.05))
     (tick,) = world.models['ticker'].plugins
     world.step(30)
     world.delete_model('tinybot')
@@ -144,7 +145,7 @@ def test_a_second_plugin_of_a_single_kind_is_refused(tick_kind):
         load_urdf(ticking_robot(0.1, 0.2))
     world = World()
     with pytest.raises(WorldError, match='more than one tick plugin'):
-        world.spawn_urdf('ticker', ticking_robot(0.1, 0.2))
+        spawn_robot(world, 'ticker', ticking_robot(0.1, 0.2))
     assert world.model_names() == []
 
 

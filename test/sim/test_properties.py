@@ -15,6 +15,7 @@ import numpy as np
 from repository import TINYBOT
 from service_tutorial.sim.plugins.diff_drive import MAX_WHEEL_RIM_SPEED
 from service_tutorial.sim.validation import bounded, WorldError
+from spawns import spawn_robot
 from worlds import settled_world
 
 PROPERTY_SETTINGS = settings(max_examples=60, derandomize=True, database=None, deadline=None,
@@ -172,7 +173,7 @@ def test_generated_robots_are_spawned_or_refused_and_the_world_stays_sound(
     world = tinybot_world()
     before = everything(world)
     try:
-        world.spawn_urdf('generated', xml, position=position, orientation=orientation)
+        spawn_robot(world, 'generated', xml, position=position, orientation=orientation)
     except WorldError as error:
         assert str(error)
         assert world.model_names() == ['tinybot']

@@ -9,6 +9,7 @@ import pytest
 from repository import R2D2, ROOT, TINYBOT
 from service_tutorial.sim.rendering import SceneCamera
 from service_tutorial.sim.world import World
+from spawns import spawn_file
 import yaml
 
 R2D2_SPAWN = (-2.0, 1.0, 1.0)
@@ -37,11 +38,11 @@ def camera():
 def lesson_world(with_r2d2):
     """Tinybot at the origin and, if asked, R2-D2 at the lesson's spawn pose."""
     world = World()
-    world.spawn_urdf_file('tinybot', TINYBOT)
+    spawn_file(world, 'tinybot', TINYBOT)
     if with_r2d2:
         turn = (math.cos(-math.pi / 4), 0.0, 0.0, math.sin(-math.pi / 4))
-        world.spawn_urdf_file('r2d2', R2D2,
-                              position=R2D2_SPAWN, orientation=turn)
+        spawn_file(world, 'r2d2', R2D2,
+                   position=R2D2_SPAWN, orientation=turn)
     return world
 
 
@@ -82,8 +83,8 @@ def test_new_model_gets_a_new_renderer(camera):
     before = camera.render(world.model, world.data)
     region = window(camera, R2D2_BODY, 6)
     turn = (math.cos(-math.pi / 4), 0.0, 0.0, math.sin(-math.pi / 4))
-    world.spawn_urdf_file('r2d2', R2D2,
-                          position=R2D2_SPAWN, orientation=turn)
+    spawn_file(world, 'r2d2', R2D2,
+               position=R2D2_SPAWN, orientation=turn)
     after = camera.render(world.model, world.data)
     assert changed_fraction(after, before, region) > 0.5
     world.delete_model('r2d2')

@@ -14,6 +14,7 @@ import pytest
 from repository import MODELS, TEST_MODELS, TINYBOT
 from service_tutorial.sim.urdf.builder import load_urdf
 from service_tutorial.sim.world import World
+from spawns import spawn_file
 
 SCENERY_FILES = ('yard.urdf',)
 LESSON_FILES = sorted(path for path in glob.glob(os.path.join(MODELS, '*.urdf'))
@@ -48,7 +49,7 @@ def test_model_runs_ten_seconds_without_warnings(path, caplog, tmp_path, monkeyp
     name = os.path.splitext(os.path.basename(path))[0]
     world = World()
     with caplog.at_level(logging.WARNING, logger='service_tutorial.world'):
-        model = world.spawn_urdf_file(name, path)
+        model = spawn_file(world, name, path)
         steps = round(10.0 / world.timestep)
         assert world.step(steps) == steps
     # The lesson's robots spawn without a word; a test robot only with its notes (meshes

@@ -8,6 +8,7 @@ from repository import model_path, R2D2, TEST_MODELS, TINYBOT
 from service_tutorial.sim.plugins.ray_sensor import RaySensor
 from service_tutorial.sim.validation import WorldError
 from service_tutorial.sim.world import World
+from spawns import spawn_file
 
 YARD = model_path('yard')
 LASER_ROBOT = model_path('sensor_laser', TEST_MODELS)
@@ -41,9 +42,9 @@ def test_the_yard_is_scenery_not_a_model_and_keeps_the_lesson_places_clear():
     # The floor, and a visual and a collision shape for 4 walls, 4 crates and a post.
     assert world.model.ngeom == 1 + 2 * 9
     # tinybot at the origin and R2-D2 at the lesson's spawn point fit in and stand there.
-    world.spawn_urdf_file('tinybot', TINYBOT)
-    world.spawn_urdf_file('r2d2', R2D2, position=(-2.0, 1.0, 1.0),
-                          orientation=(math.cos(-math.pi / 4), 0.0, 0.0, math.sin(-math.pi / 4)))
+    spawn_file(world, 'tinybot', TINYBOT)
+    spawn_file(world, 'r2d2', R2D2, position=(-2.0, 1.0, 1.0),
+               orientation=(math.cos(-math.pi / 4), 0.0, 0.0, math.sin(-math.pi / 4)))
     world.step(round(2.0 / world.timestep))
     assert world.model_names() == ['tinybot', 'r2d2']
     assert world.get_model_state('tinybot').position == pytest.approx([0.0, 0.0, 0.0], abs=2e-3)
@@ -58,7 +59,7 @@ def test_the_yard_is_scenery_not_a_model_and_keeps_the_lesson_places_clear():
 
 def test_mjcf_scenery_geoms_of_the_world_body_and_of_bodies_are_seen(tmp_path):
     world = World(scenery=write(tmp_path, 'boxes.xml', MJCF_BOXES))
-    world.spawn_urdf_file('laser', LASER_ROBOT)
+    spawn_file(world, 'laser', LASER_ROBOT)
     ranges = scan(world)
     assert ranges[90] == pytest.approx(1.0, abs=0.005)
     world.set_model_state('laser', position=(0.0, 3.0 - 0.5, 0.0),
@@ -89,7 +90,7 @@ def test_mjcf_scenery_geoms_of_the_world_body_and_of_bodies_are_seen(tmp_path):
     ('entity.xml', '<!DOCTYPE m [<!ENTITY e SYSTEM "file:///etc/passwd">]><mujoco>&e;</mujoco>',
      'contains a DOCTYPE or ENTITY declaration, which is refused'),
     ('world.sdf', '<sdf version="1.6"><world name="w"/></sdf>',
-     'is neither URDF nor MJCF: its root element is <sdf>'),
+     'is SDF (root element <sdf>)'),
 ])
 def test_scenery_that_is_not_static_or_not_safe_is_refused(tmp_path, name, text, message):
     path = write(tmp_path, name, text)
@@ -101,5 +102,5 @@ def test_scenery_that_is_not_static_or_not_safe_is_refused(tmp_path, name, text,
 
 def test_a_missing_scenery_file_is_refused_by_name(tmp_path):
     path = str(tmp_path / 'nowhere.urdf')
-    with pytest.raises(WorldError, match=f"cannot read scenery file '{path}'"):
+    with pytest.raises(WorldError, match=f"scenery file '{path}' cannot be read"):
         World(scenery=path)

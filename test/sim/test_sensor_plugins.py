@@ -13,6 +13,7 @@ from service_tutorial.sim.plugins.ray_sensor import RaySensor
 from service_tutorial.sim.urdf.builder import load_urdf
 from service_tutorial.sim.validation import WorldError
 from service_tutorial.sim.world import World
+from spawns import spawn_file, spawn_robot
 
 LASER_ROBOT = model_path('sensor_laser', TEST_MODELS)
 WALL = model_path('props/wall', TEST_MODELS)
@@ -30,8 +31,8 @@ def laser_world(wall_distance=1.0, **replacements):
         assert old in urdf, old
         urdf = urdf.replace(old, new)
     world = World()
-    world.spawn_urdf('laser', urdf)
-    world.spawn_urdf_file('wall', WALL, position=(LASER_ORIGIN[0] + wall_distance, 0.0, 0.0))
+    spawn_robot(world, 'laser', urdf)
+    spawn_file(world, 'wall', WALL, position=(LASER_ORIGIN[0] + wall_distance, 0.0, 0.0))
     return world, world.models['laser'].plugin(RaySensor)
 
 
@@ -179,7 +180,7 @@ def test_laser_scans_at_its_rate_in_simulation_time_only_while_active():
 def test_laser_sees_other_robots_but_not_its_own():
     world, laser = laser_world(3.0)
     listen(laser)
-    world.spawn_urdf_file('other', LASER_ROBOT, position=(1.5, 0.0, 0.0))
+    spawn_file(world, 'other', LASER_ROBOT, position=(1.5, 0.0, 0.0))
     world.step(1)
     # The other post's laser housing (a cylinder of radius 0.04 around x = 1.55).
     assert laser.ranges[90] == pytest.approx(1.55 - 0.04 - LASER_ORIGIN[0], abs=0.005)
@@ -187,8 +188,8 @@ def test_laser_sees_other_robots_but_not_its_own():
 
 def test_camera_sees_the_red_box_ahead_in_the_middle_of_its_image():
     world = World()
-    world.spawn_urdf_file('camera_post', CAMERA_ROBOT)
-    world.spawn_urdf_file('box', RED_BOX, position=(1.5, 0.0, 0.0))
+    spawn_file(world, 'camera_post', CAMERA_ROBOT)
+    spawn_file(world, 'box', RED_BOX, position=(1.5, 0.0, 0.0))
     camera = world.models['camera_post'].plugin(CameraSensor)
     try:
         listen(camera)
@@ -217,7 +218,7 @@ def test_camera_sees_the_red_box_ahead_in_the_middle_of_its_image():
 
 def test_imu_at_rest_reads_gravity_up_and_follows_a_turn():
     world = World(cmd_vel_timeout=0.0)
-    world.spawn_urdf_file('imu_bot', IMU_ROBOT)
+    spawn_file(world, 'imu_bot', IMU_ROBOT)
     ros1, ros2 = (plugin for plugin in world.models['imu_bot'].plugins
                   if isinstance(plugin, ImuSensor))
     assert (ros1.config.name, ros2.config.name) == ('imu_ros1', 'imu_ros2')
@@ -247,7 +248,7 @@ def test_imu_noise_and_its_covariance_come_from_the_block():
                                         '<gaussianNoise>0.05</gaussianNoise>')
     urdf = urdf.replace('<updateRate>50.0</updateRate>', '<updateRate>0</updateRate>')
     world = World()
-    world.spawn_urdf('imu_bot', urdf)
+    spawn_robot(world, 'imu_bot', urdf)
     imu = world.models['imu_bot'].plugins[1]
     samples = []
     imu.listener = lambda sensor: samples.append(sensor.linear_acceleration)
@@ -263,7 +264,7 @@ def test_a_ros2_imus_per_axis_noise_and_its_covariance_come_from_the_block():
     urdf = read_file(IMU_ROBOT).replace('<stddev>0.0</stddev>', '<stddev>0.02</stddev>')
     urdf = urdf.replace('<update_rate>100</update_rate>', '<update_rate>0</update_rate>')
     world = World()
-    world.spawn_urdf('imu_bot', urdf)
+    spawn_robot(world, 'imu_bot', urdf)
     (ros2,) = (plugin for plugin in world.models['imu_bot'].plugins
                if isinstance(plugin, ImuSensor) and plugin.config.name == 'imu_ros2')
     samples = []
@@ -280,7 +281,7 @@ def test_a_ros2_imus_per_axis_noise_and_its_covariance_come_from_the_block():
 
 def test_tinybot_carries_a_laser_a_camera_and_an_imu():
     world = World()
-    world.spawn_urdf_file('tinybot', TINYBOT)
+    spawn_file(world, 'tinybot', TINYBOT)
     tinybot = world.models['tinybot']
     laser, camera, imu = (tinybot.plugin(kind) for kind in (RaySensor, CameraSensor, ImuSensor))
     assert (laser.config.samples, laser.config.update_rate, laser.config.link) == \
@@ -360,7 +361,7 @@ def test_bad_laser_blocks_are_refused_naming_sensor_tag_and_value(old, new, mess
     assert refusal_of(LASER_ROBOT, old, new) == message
     world = World()
     with pytest.raises(WorldError, match='front_laser'):
-        world.spawn_urdf('laser', read_file(LASER_ROBOT).replace(old, new))
+        spawn_robot(world, 'laser', read_file(LASER_ROBOT).replace(old, new))
     assert world.model_names() == []
 
 

@@ -7,11 +7,11 @@ import mujoco
 import numpy as np
 import pytest
 from repository import model_path, R2D2, read_file, TEST_MODELS, TINYBOT
-from service_tutorial.sim.description import UrdfError
 from service_tutorial.sim.description_cache import DescriptionCache
 from service_tutorial.sim.spawning import SpawnOrder
-from service_tutorial.sim.validation import WorldError
+from service_tutorial.sim.validation import DescriptionError, WorldError
 from service_tutorial.sim.world import World
+from spawns import spawn_file, spawn_robot
 
 MESHBOT = model_path('meshbot', TEST_MODELS)
 MISSINGBOT = model_path('missingbot', TEST_MODELS)
@@ -30,16 +30,16 @@ def contents(world):
 def test_a_deleted_robot_leaves_nothing_behind(path):
     world, fresh = World(), World()
     for one in (world, fresh):
-        one.spawn_urdf_file('first', TINYBOT)
+        spawn_file(one, 'first', TINYBOT)
     for _ in range(3):
-        world.spawn_urdf_file('visitor', path, position=(3.0, 0.0, 0.5))
-        world.spawn_urdf_file('last', TINYBOT, position=(0.0, 3.0, 0.0))
+        spawn_file(world, 'visitor', path, position=(3.0, 0.0, 0.5))
+        spawn_file(world, 'last', TINYBOT, position=(0.0, 3.0, 0.0))
         world.delete_model('visitor')
         world.delete_model('last')
         assert contents(world) == contents(fresh)
         assert world._spec.find_default('visitor::main') is None
     # The names are free again, and a robot spawned after the deletes is whole.
-    world.spawn_urdf_file('visitor', path, position=(3.0, 0.0, 0.5))
+    spawn_file(world, 'visitor', path, position=(3.0, 0.0, 0.5))
     world.step(10)
     assert world.model_names() == ['first', 'visitor']
 
@@ -49,12 +49,12 @@ def test_a_deleted_batch_leaves_nothing_behind_and_every_other_robot_its_state()
     # group in any order, and the last to leave takes the group's frame with it.
     world, fresh = World(), World()
     for one in (world, fresh):
-        one.spawn_urdf_file('first', TINYBOT)
+        spawn_file(one, 'first', TINYBOT)
     world.models['first'].drive().command_velocity(0.2, 0.5)
     urdf = read_file(TINYBOT)
     for _ in range(2):
-        world.spawn_urdf_batch([SpawnOrder(f'tiny{index}', urdf, position=(2.0, index, 0.0))
-                                for index in range(7)])
+        world.spawn([SpawnOrder(f'tiny{index}', urdf, position=(2.0, index, 0.0))
+                     for index in range(7)])
         world.step(50)
         for name in ('tiny3', 'tiny0', 'tiny6', 'tiny1', 'tiny2', 'tiny5', 'tiny4'):
             kept = {other: world.get_model_state(other)
@@ -72,8 +72,8 @@ def test_a_deleted_batch_leaves_nothing_behind_and_every_other_robot_its_state()
 def test_a_robot_spawned_again_reuses_its_description():
     world = World()
     urdf = read_file(TINYBOT)
-    world.spawn_urdf('bot0', urdf, base_dir=os.path.dirname(TINYBOT))
-    world.spawn_urdf('bot1', urdf, base_dir=os.path.dirname(TINYBOT), position=(1.0, 0.0, 0.0))
+    spawn_robot(world, 'bot0', urdf, base_dir=os.path.dirname(TINYBOT))
+    spawn_robot(world, 'bot1', urdf, base_dir=os.path.dirname(TINYBOT), position=(1.0, 0.0, 0.0))
     first, second = world.models['bot0'], world.models['bot1']
     assert first.description is second.description
     # Each model has plugins of its own, configured from the shared description.
@@ -83,7 +83,7 @@ def test_a_robot_spawned_again_reuses_its_description():
     assert world.models['bot0'].drive().odometry().position[0] > 0.02
     assert abs(world.models['bot1'].drive().odometry().position[0]) < 1e-3
     other = urdf.replace('</robot>', '<!-- another --></robot>')
-    world.spawn_urdf('bot2', other, base_dir=os.path.dirname(TINYBOT), position=(2.0, 0.0, 0.0))
+    spawn_robot(world, 'bot2', other, base_dir=os.path.dirname(TINYBOT), position=(2.0, 0.0, 0.0))
     assert world.models['bot2'].description is not first.description
 
 
@@ -91,25 +91,25 @@ def test_a_description_is_built_again_when_its_mesh_files_change(tmp_path):
     shutil.copytree(TEST_MODELS, tmp_path / 'models')
     path = str(tmp_path / 'models' / 'meshbot.urdf')
     world = World()
-    world.spawn_urdf_file('before', path)
+    spawn_file(world, 'before', path)
     box = tmp_path / 'models' / 'meshes' / 'box.obj'
     # The same box, twice as large: different bytes, a different size on disk.
     lines = [(' '.join(['v'] + [str(2.0 * float(v)) for v in line.split()[1:]])
               if line.startswith('v ') else line) for line in box.read_text().splitlines()]
     box.write_text('\n'.join(lines) + '\n# twice as large\n')
-    world.spawn_urdf_file('after', path, position=(2.0, 0.0, 0.0))
+    spawn_file(world, 'after', path, position=(2.0, 0.0, 0.0))
     before, after = (world.models[name].description for name in ('before', 'after'))
     assert before is not after
     assert after.spec.meshes[-1].uservert[0] == 2.0 * before.spec.meshes[-1].uservert[0]
     box.unlink()
-    world.spawn_urdf_file('gone', path, position=(4.0, 0.0, 0.0))
+    spawn_file(world, 'gone', path, position=(4.0, 0.0, 0.0))
     assert world.models['gone'].description.missing_meshes == ('meshes/box.obj',)
 
 
 def test_missing_meshes_are_looked_for_at_every_spawn(caplog):
     world = World()
     for index in range(2):
-        world.spawn_urdf_file(f'missing{index}', MISSINGBOT, position=(2.0 * index, 0.0, 0.0))
+        spawn_file(world, f'missing{index}', MISSINGBOT, position=(2.0 * index, 0.0, 0.0))
     first, second = (world.models[f'missing{index}'].description for index in range(2))
     assert first is not second and first.missing_meshes == second.missing_meshes
     assert caplog.text.count("'meshes/not_there.stl' cannot be had") == 2
@@ -119,7 +119,7 @@ def test_refusals_are_not_kept():
     world = World()
     for _ in range(2):
         with pytest.raises(WorldError, match='does not parse as XML'):
-            world.spawn_urdf('bad', '<robot name="x"><link name="a"></robot>')
+            spawn_robot(world, 'bad', '<robot name="x"><link name="a"></robot>')
     assert world.model_names() == []
 
 
@@ -132,7 +132,7 @@ def test_the_cache_keeps_a_bounded_number_of_descriptions():
     assert cache.load(texts[0]) is not first[0]
     assert cache.load(texts[2]) is first[2]
     assert cache.load(texts[2].encode()) is not first[2]
-    with pytest.raises(UrdfError):
+    with pytest.raises(DescriptionError):
         cache.load('<robot/>')
     assert isinstance(first[0].spec, mujoco.MjSpec)
 

@@ -5,6 +5,7 @@ import pytest
 from repository import R2D2, TINYBOT
 from service_tutorial.sim.plugins.diff_drive import DiffDrive
 from service_tutorial.sim.world import World
+from spawns import spawn_file
 
 
 def assert_bound(world, model):
@@ -30,8 +31,8 @@ def assert_bound(world, model):
 
 def test_a_model_is_found_again_by_name_after_every_recompile():
     world = World()
-    world.spawn_urdf_file('r2d2', R2D2, position=(3.0, 0.0, 0.0))
-    world.spawn_urdf_file('tinybot', TINYBOT)
+    spawn_file(world, 'r2d2', R2D2, position=(3.0, 0.0, 0.0))
+    spawn_file(world, 'tinybot', TINYBOT)
     tinybot = world.models['tinybot']
     assert_bound(world, tinybot)
     assert tinybot.description.actuators == ('wheel_left_joint_drive',
@@ -43,15 +44,15 @@ def test_a_model_is_found_again_by_name_after_every_recompile():
     assert (tinybot.root_id, tinybot.free_qpos_adr) != before[:2]
     assert not np.array_equal(tinybot.joint_qpos_adr, before[2])
     assert_bound(world, tinybot)
-    world.spawn_urdf_file('r2d2', R2D2, position=(3.0, 0.0, 0.0))
+    spawn_file(world, 'r2d2', R2D2, position=(3.0, 0.0, 0.0))
     assert_bound(world, tinybot)
     assert_bound(world, world.models['r2d2'])
 
 
 def test_models_mapping_is_read_only_and_holds_the_plugins():
     world = World()
-    world.spawn_urdf_file('tinybot', TINYBOT)
-    world.spawn_urdf_file('r2d2', R2D2, position=(3.0, 0.0, 0.0))
+    spawn_file(world, 'tinybot', TINYBOT)
+    spawn_file(world, 'r2d2', R2D2, position=(3.0, 0.0, 0.0))
     assert list(world.models) == ['tinybot', 'r2d2']
     with pytest.raises(TypeError):
         world.models['c3po'] = world.models['r2d2']
@@ -65,8 +66,8 @@ def test_models_mapping_is_read_only_and_holds_the_plugins():
 
 def test_saved_state_is_written_back_where_the_model_now_is():
     world = World()
-    world.spawn_urdf_file('r2d2', R2D2, position=(3.0, 0.0, 0.0))
-    world.spawn_urdf_file('tinybot', TINYBOT)
+    spawn_file(world, 'r2d2', R2D2, position=(3.0, 0.0, 0.0))
+    spawn_file(world, 'tinybot', TINYBOT)
     world.models['tinybot'].drive().command_velocity(0.2, 0.5)
     world.step(100)
     tinybot = world.models['tinybot']

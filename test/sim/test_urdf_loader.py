@@ -17,6 +17,7 @@ from service_tutorial.sim.urdf import hardened_xml
 from service_tutorial.sim.urdf.builder import load_urdf
 from service_tutorial.sim.validation import WorldError
 from service_tutorial.sim.world import World
+from spawns import spawn_robot
 
 INERTIAL = ('<inertial><mass value="{mass}"/><inertia ixx="0.01" iyy="0.01" izz="0.01" '
             'ixy="0" ixz="0" iyz="0"/></inertial>')
@@ -477,11 +478,11 @@ def test_refused_urdf(xml, message):
 def test_refusals_reach_the_world_as_world_errors():
     world = World()
     with pytest.raises(WorldError, match=r'model_xml is not URDF: root element is <sdf>'):
-        world.spawn_urdf('thing', '<sdf version="1.6"/>')
+        spawn_robot(world, 'thing', '<sdf version="1.6"/>')
     with pytest.raises(WorldError, match='DOCTYPE'):
-        world.spawn_urdf('thing', '<!DOCTYPE robot SYSTEM "file:///etc/passwd"><robot/>')
+        spawn_robot(world, 'thing', '<!DOCTYPE robot SYSTEM "file:///etc/passwd"><robot/>')
     with pytest.raises(WorldError, match='outside the model'):
-        world.spawn_urdf('thing', mesh_robot('/etc/passwd'), base_dir='/tmp')
+        spawn_robot(world, 'thing', mesh_robot('/etc/passwd'), base_dir='/tmp')
     assert world.model_names() == []
     assert world.model.nbody == 1
 
@@ -495,7 +496,7 @@ def test_mesh_robot_can_be_deleted_and_spawned_again(tmp_path):
                               '</collision>'))
     world = World()
     for _ in range(2):
-        world.spawn_urdf('meshy', urdf, base_dir=str(tmp_path))
+        spawn_robot(world, 'meshy', urdf, base_dir=str(tmp_path))
         assert world.model.nmesh == 2
         world.delete_model('meshy')
         assert world.model.nmesh == 0

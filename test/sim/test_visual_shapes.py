@@ -9,6 +9,7 @@ from repository import model_path, TEST_MODELS
 from service_tutorial.sim import frames
 from service_tutorial.sim.visual_shapes import shape_poses, visual_shapes
 from service_tutorial.sim.world import World
+from spawns import spawn_file, spawn_robot
 
 TINYBOT_BLUE = (0.16, 0.38, 0.74, 1.0)
 
@@ -16,7 +17,7 @@ TINYBOT_BLUE = (0.16, 0.38, 0.74, 1.0)
 @pytest.fixture
 def world():
     world = World(scenery=model_path('yard'))
-    world.spawn_urdf_file('tinybot', model_path('tinybot'))
+    spawn_file(world, 'tinybot', model_path('tinybot'))
     return world
 
 
@@ -45,8 +46,8 @@ def test_a_box_is_drawn_at_its_size_and_a_mesh_with_its_own_vertices():
     box = ('<robot name="b"><link name="base"><inertial><mass value="1"/><inertia ixx="0.01" '
            'iyy="0.01" izz="0.01" ixy="0" ixz="0" iyz="0"/></inertial><visual><geometry>'
            '<box size="0.4 0.2 0.1"/></geometry></visual></link></robot>')
-    world.spawn_urdf('box', box)
-    world.spawn_urdf_file('meshbot', os.path.join(TEST_MODELS, 'meshbot.urdf'))
+    spawn_robot(world, 'box', box)
+    spawn_file(world, 'meshbot', os.path.join(TEST_MODELS, 'meshbot.urdf'))
     shapes = visual_shapes(world)
     (box_shape,) = [shape for shape in shapes if shape.model_name == 'box']
     mesh_shapes = [shape for shape in shapes if shape.model_name == 'meshbot']

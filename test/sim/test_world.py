@@ -13,6 +13,7 @@ from service_tutorial.sim import frames
 from service_tutorial.sim.plugins.diff_drive import MAX_WHEEL_RIM_SPEED
 from service_tutorial.sim.validation import WorldError
 from service_tutorial.sim.world import World
+from spawns import spawn_file, spawn_robot
 from worlds import drive_and_stop, heading, settled_world
 
 FACING_MINUS_Y = (0.707, 0.0, 0.0, -0.707)
@@ -45,8 +46,8 @@ def tinybot_world():
 
 
 def test_r2d2_dropped_from_one_metre_lands_upright_facing_minus_y(world):
-    world.spawn_urdf('r2d2', read_file(R2D2), position=(-2.0, 1.0, 1.0),
-                     orientation=FACING_MINUS_Y, reference_frame='world')
+    spawn_robot(world, 'r2d2', read_file(R2D2), position=(-2.0, 1.0, 1.0),
+                orientation=FACING_MINUS_Y, reference_frame='world')
     world.step(1000)
     state = world.get_model_state('r2d2')
     # base_footprint rests on the floor, sunk by the contact softness only.
@@ -57,15 +58,15 @@ def test_r2d2_dropped_from_one_metre_lands_upright_facing_minus_y(world):
 
 
 def test_non_unit_quaternion_is_normalised(world):
-    world.spawn_urdf_file('r2d2', R2D2, orientation=(0.0, 0.0, 0.0, 4.0))
+    spawn_file(world, 'r2d2', R2D2, orientation=(0.0, 0.0, 0.0, 4.0))
     orientation = world.get_model_state('r2d2').orientation
     np.testing.assert_allclose(np.abs(orientation), [0.0, 0.0, 0.0, 1.0], atol=1e-12)
 
 
 def test_duplicate_name_is_refused(world):
-    world.spawn_urdf_file('r2d2', R2D2)
+    spawn_file(world, 'r2d2', R2D2)
     with pytest.raises(WorldError, match="a model named 'r2d2' already exists"):
-        world.spawn_urdf_file('r2d2', R2D2, position=(3.0, 0.0, 0.0))
+        spawn_file(world, 'r2d2', R2D2, position=(3.0, 0.0, 0.0))
     assert world.model_names() == ['r2d2']
 
 
@@ -79,7 +80,7 @@ def test_duplicate_name_is_refused(world):
 ])
 def test_bad_model_names_are_refused(world, name, message):
     with pytest.raises(WorldError, match=message):
-        world.spawn_urdf_file(name, R2D2)
+        spawn_file(world, name, R2D2)
     assert world.model_names() == []
 
 
@@ -90,13 +91,13 @@ def test_bad_poses_are_refused(world):
             ({'orientation': (math.nan, 0.0, 0.0, 1.0)}, 'orientation contains NaN'),
             ({'reference_frame': 'foo'}, "unknown reference frame 'foo'")]:
         with pytest.raises(WorldError, match=message):
-            world.spawn_urdf_file('r2d2', R2D2, **kwargs)
+            spawn_file(world, 'r2d2', R2D2, **kwargs)
     assert world.model_names() == []
 
 
 def test_model_listing_and_delete(world):
-    world.spawn_urdf_file('tinybot', TINYBOT)
-    world.spawn_urdf_file('r2d2', R2D2, position=(2.0, 0.0, 0.0))
+    spawn_file(world, 'tinybot', TINYBOT)
+    spawn_file(world, 'r2d2', R2D2, position=(2.0, 0.0, 0.0))
     assert world.model_names() == ['tinybot', 'r2d2']
     assert 'r2d2' in world.models and 'c3po' not in world.models
     assert [name for name, model in world.models.items() if model.drive()] == ['tinybot']
@@ -108,9 +109,9 @@ def test_model_listing_and_delete(world):
 
 
 def test_reference_frames(world):
-    world.spawn_urdf_file('tinybot', TINYBOT, position=(1.0, 0.0, 0.0),
-                          orientation=frames.yaw_quaternion(math.pi / 2.0))
-    world.spawn_urdf_file('r2d2', R2D2, position=(1.0, 0.0, 0.0), reference_frame='tinybot')
+    spawn_file(world, 'tinybot', TINYBOT, position=(1.0, 0.0, 0.0),
+               orientation=frames.yaw_quaternion(math.pi / 2.0))
+    spawn_file(world, 'r2d2', R2D2, position=(1.0, 0.0, 0.0), reference_frame='tinybot')
     in_world = world.get_model_state('r2d2', 'world')
     np.testing.assert_allclose(in_world.position, [1.0, 1.0, 0.0], atol=1e-9)
     assert heading(in_world.orientation) == pytest.approx(math.pi / 2.0)
@@ -128,8 +129,8 @@ def test_reference_frames(world):
 
 
 def test_set_and_get_model_state(world):
-    world.spawn_urdf_file('r2d2', R2D2)
-    world.spawn_urdf_file('tinybot', TINYBOT, position=(0.0, 3.0, 0.0))
+    spawn_file(world, 'r2d2', R2D2)
+    spawn_file(world, 'tinybot', TINYBOT, position=(0.0, 3.0, 0.0))
     orientation = frames.yaw_quaternion(0.6)
     world.set_model_state('r2d2', position=(3.0, 4.0, 0.5), orientation=orientation,
                           linear_velocity=(0.5, 0.0, 0.0), angular_velocity=(0.0, 0.0, 0.2))
@@ -168,7 +169,7 @@ def test_anchored_model_moves_only_by_pose(world):
             '</inertial><collision><geometry><box size="0.1 0.1 1"/></geometry></collision>'
             '</link><joint name="anchor" type="fixed"><parent link="world"/>'
             '<child link="pole"/><origin xyz="0 0 0.5"/></joint></robot>')
-    world.spawn_urdf('post', post, position=(2.0, 0.0, 0.0))
+    spawn_robot(world, 'post', post, position=(2.0, 0.0, 0.0))
     world.step(100)
     np.testing.assert_allclose(world.get_model_state('post').position, [2.0, 0.0, 0.5])
     world.set_model_state('post', position=(-1.0, 0.0, 0.5), orientation=(1.0, 0.0, 0.0, 0.0))
@@ -185,7 +186,7 @@ def test_anchored_model_moves_only_by_pose(world):
                                                ('reset_simulation', False)])
 def test_resets_put_models_back_at_rest(tinybot_world, reset, keeps_time):
     world = tinybot_world
-    world.spawn_urdf_file('r2d2', R2D2, position=(-2.0, 1.0, 1.0), orientation=FACING_MINUS_Y)
+    spawn_file(world, 'r2d2', R2D2, position=(-2.0, 1.0, 1.0), orientation=FACING_MINUS_Y)
     drive([world], 0.2, 0.5, 1.0)
     time_before = world.time
     getattr(world, reset)()
@@ -230,7 +231,7 @@ def test_tinybot_turns_and_drives_as_commanded(linear_x, angular_z, seconds, tol
     urdf = read_file(TINYBOT).replace('<odometry_source>0</odometry_source>',
                                       f'<odometry_source>{odometry_source}</odometry_source>')
     world = World()
-    world.spawn_urdf('tinybot', urdf)
+    spawn_robot(world, 'tinybot', urdf)
     world.step(250)
     turned, travelled, odometry_turned = drive_and_stop(
         world, 'tinybot', linear_x, angular_z, seconds, rest_steps=250, odometry=True)
@@ -289,9 +290,9 @@ def test_a_new_cmd_vel_timeout_applies_to_the_command_in_force(tinybot_world):
 
 
 def test_diff_drive_requests_are_checked(world):
-    world.spawn_urdf_file('r2d2', R2D2)
+    spawn_file(world, 'r2d2', R2D2)
     assert world.models['r2d2'].drive() is None
-    world.spawn_urdf_file('tinybot', TINYBOT, position=(2.0, 0.0, 0.0))
+    spawn_file(world, 'tinybot', TINYBOT, position=(2.0, 0.0, 0.0))
     with pytest.raises(WorldError, match='linear_x is NaN'):
         world.models['tinybot'].drive().command_velocity(math.nan, 0.0)
     odometry = world.models['tinybot'].drive().odometry()
@@ -305,10 +306,10 @@ def test_diff_drive_requests_are_checked(world):
 def test_spawn_keeps_a_driving_robot_continuous():
     plain, busy = World(), World()
     for world in (plain, busy):
-        world.spawn_urdf_file('tinybot', TINYBOT)
+        spawn_file(world, 'tinybot', TINYBOT)
     drive([plain, busy], 0.2, 0.4, 0.5)
     before = tinybot_state(busy)
-    busy.spawn_urdf_file('r2d2', R2D2, position=(3.0, 3.0, 1.0))
+    spawn_file(busy, 'r2d2', R2D2, position=(3.0, 3.0, 1.0))
     np.testing.assert_array_equal(tinybot_state(busy), before)
     drive([plain, busy], 0.2, 0.4, 1.0)
     np.testing.assert_allclose(tinybot_state(busy), tinybot_state(plain), rtol=0, atol=1e-9)
@@ -318,8 +319,8 @@ def test_delete_keeps_a_driving_robot_continuous():
     plain, busy = World(), World()
     for world in (plain, busy):
         # R2-D2 comes first, so deleting it moves tinybot's place in the MuJoCo arrays.
-        world.spawn_urdf_file('r2d2', R2D2, position=(3.0, 3.0, 0.0))
-        world.spawn_urdf_file('tinybot', TINYBOT)
+        spawn_file(world, 'r2d2', R2D2, position=(3.0, 3.0, 0.0))
+        spawn_file(world, 'tinybot', TINYBOT)
     drive([plain, busy], 0.2, -0.4, 0.5)
     before = tinybot_state(busy)
     busy.delete_model('r2d2')
@@ -347,14 +348,14 @@ REFUSED_SPAWNS = [
 def test_refused_spawns_change_nothing():
     plain, busy = World(), World()
     for world in (plain, busy):
-        world.spawn_urdf_file('tinybot', TINYBOT)
+        spawn_file(world, 'tinybot', TINYBOT)
     drive([plain, busy], 0.2, 0.4, 0.3)
     model = busy.model
     sizes = (model.nbody, model.njnt, model.ngeom, model.nu, model.nmesh)
     qpos, qvel, act = busy.data.qpos.copy(), busy.data.qvel.copy(), busy.data.act.copy()
     for name, urdf, message in REFUSED_SPAWNS:
         with pytest.raises(WorldError, match=message):
-            busy.spawn_urdf(name, urdf)
+            spawn_robot(busy, name, urdf)
         model = busy.model
         assert (model.nbody, model.njnt, model.ngeom, model.nu, model.nmesh) == sizes
         np.testing.assert_array_equal(busy.data.qpos, qpos)
@@ -364,7 +365,7 @@ def test_refused_spawns_change_nothing():
     drive([plain, busy], 0.2, 0.4, 0.5)
     np.testing.assert_array_equal(busy.data.qpos, plain.data.qpos)
     # The same names can be used once the robot is sound.
-    busy.spawn_urdf_file('massless', R2D2, position=(3.0, 0.0, 0.0))
+    spawn_file(busy, 'massless', R2D2, position=(3.0, 0.0, 0.0))
     assert busy.model_names() == ['tinybot', 'massless']
 
 
@@ -373,8 +374,8 @@ def test_unstable_robot_is_reset_alone(poke, tmp_path, monkeypatch, caplog):
     monkeypatch.chdir(tmp_path)
     plain, broken = World(), World()
     for world in (plain, broken):
-        world.spawn_urdf_file('tinybot', TINYBOT)
-        world.spawn_urdf_file('r2d2', R2D2, position=(3.0, 3.0, 0.0))
+        spawn_file(world, 'tinybot', TINYBOT)
+        spawn_file(world, 'r2d2', R2D2, position=(3.0, 3.0, 0.0))
     drive([plain, broken], 0.2, 0.4, 0.3)
     # Reach into the MuJoCo data behind the world's back, as a renderer or a bug could.
     data = broken.data
@@ -402,7 +403,7 @@ def test_unstable_robot_is_reset_alone(poke, tmp_path, monkeypatch, caplog):
 def test_mujoco_warnings_go_to_logging(tmp_path, monkeypatch, caplog):
     monkeypatch.chdir(tmp_path)
     world = World()
-    world.spawn_urdf_file('r2d2', R2D2)
+    spawn_file(world, 'r2d2', R2D2)
     world.data.qvel[0] = math.inf
     with caplog.at_level(logging.WARNING, logger='service_tutorial.world'):
         world.step(5)
@@ -425,7 +426,7 @@ def test_spawned_models_step_exactly_as_bare_mujoco_steps(tinybot_world):
     # How long spawning and stepping take is the benchmark's business (its core table).
     world = tinybot_world
     for index in range(5):
-        world.spawn_urdf_file(f'r2d2_{index}', R2D2, position=(2.0 + index, 0.0, 0.0))
+        spawn_file(world, f'r2d2_{index}', R2D2, position=(2.0 + index, 0.0, 0.0))
     assert world.model_names() == ['tinybot'] + [f'r2d2_{index}' for index in range(5)]
 
     model, data = world.model, world.data
@@ -463,9 +464,9 @@ def block_robot(mass, size):
 def test_robot_unstable_at_its_spawn_pose_is_removed_and_the_others_go_on(label, urdf, caplog):
     plain, broken = World(), World()
     for world in (plain, broken):
-        world.spawn_urdf_file('tinybot', TINYBOT)
+        spawn_file(world, 'tinybot', TINYBOT)
     drive([plain, broken], 0.2, 0.4, 0.2)
-    broken.spawn_urdf('block', urdf, position=(2.0, 0.0, 0.3))
+    spawn_robot(broken, 'block', urdf, position=(2.0, 0.0, 0.3))
     with caplog.at_level(logging.WARNING, logger='service_tutorial.world'):
         caplog.clear()  # the spawns' INFO lines are kept where the root logs INFO (launch)
         drive([plain, broken], 0.2, 0.4, 0.3)
@@ -483,7 +484,7 @@ def test_robot_unstable_at_its_spawn_pose_is_removed_and_the_others_go_on(label,
         'removed from the world']
     # tinybot went through every retaken step as if the block had never been there.
     np.testing.assert_allclose(tinybot_state(broken), tinybot_state(plain), rtol=0, atol=1e-9)
-    broken.spawn_urdf_file('block', R2D2, position=(2.0, 0.0, 0.0))
+    spawn_file(broken, 'block', R2D2, position=(2.0, 0.0, 0.0))
     assert broken.model_names() == ['tinybot', 'block']
 
 
@@ -496,7 +497,7 @@ def test_robot_made_unstable_from_outside_gets_one_reset_per_placement(caplog):
         f'<joint name="j{i}" type="continuous"><parent link="l{i - 1}"/><child link="l{i}"/>'
         '<origin xyz="0 0.12 0" rpy="0.3 0.2 0.1"/><axis xyz="1 0 0"/></joint>'
         for i in range(1, 4)) + '</robot>')
-    world.spawn_urdf('chain', chain, position=(0.0, 0.0, 0.5))
+    spawn_robot(world, 'chain', chain, position=(0.0, 0.0, 0.5))
     with caplog.at_level(logging.WARNING, logger='service_tutorial.world'):
         for _ in range(2):
             # A spin the physics cannot follow, yet below the velocity limit.
@@ -515,7 +516,7 @@ def test_robot_made_unstable_from_outside_gets_one_reset_per_placement(caplog):
     (1e300, 0.0), (1.7e308, 1.7e308), (-1e308, 1e308), (0.0, -1e300), (40.0, 3.0)])
 def test_absurd_drive_commands_are_scaled_to_the_rim_speed_limit(linear_x, angular_z):
     world = World()
-    world.spawn_urdf_file('tinybot', TINYBOT)
+    spawn_file(world, 'tinybot', TINYBOT)
     config = world.models['tinybot'].drive().config
     applied_x, applied_z = world.models['tinybot'].drive().command_velocity(linear_x, angular_z)
     rim_speeds = (applied_x - applied_z * config.wheel_separation / 2.0,
@@ -535,8 +536,8 @@ def test_absurd_drive_commands_are_scaled_to_the_rim_speed_limit(linear_x, angul
 def test_pose_limits_and_extreme_quaternions(world):
     with pytest.raises(WorldError, match=r'position must stay below 1e\+08 m in magnitude: '
                                          r'\[1e\+300, 0.0, 0.0\]'):
-        world.spawn_urdf_file('r2d2', R2D2, position=(1e300, 0.0, 0.0))
-    world.spawn_urdf_file('r2d2', R2D2, orientation=(1e300, 0.0, 0.0, 1e300))
+        spawn_file(world, 'r2d2', R2D2, position=(1e300, 0.0, 0.0))
+    spawn_file(world, 'r2d2', R2D2, orientation=(1e300, 0.0, 0.0, 1e300))
     np.testing.assert_allclose(world.get_model_state('r2d2').orientation,
                                [math.sqrt(0.5), 0.0, 0.0, math.sqrt(0.5)], atol=1e-12)
     world.set_model_state('r2d2', position=(0.0, 0.0, 0.0), orientation=(0.0, 0.0, 0.0, 1e-300))
@@ -563,17 +564,17 @@ def pile(count):
 def test_contacts_beyond_mujocos_memory_refuse_a_spawn_or_reset_the_robot(caplog):
     plain, crowded = World(), World()
     for world in (plain, crowded):
-        world.spawn_urdf_file('tinybot', TINYBOT)
+        spawn_file(world, 'tinybot', TINYBOT)
     drive([plain, crowded], 0.2, 0.4, 0.1)
     before = tinybot_state(crowded)
     with pytest.raises(WorldError, match=r"model 'heap' cannot be simulated at \[2.0, 0.0, 0.5\]"
                                          r': mj_stackAlloc: out of memory'):
-        crowded.spawn_urdf('heap', pile(80), position=(2.0, 0.0, 0.5))
+        spawn_robot(crowded, 'heap', pile(80), position=(2.0, 0.0, 0.5))
     assert crowded.model_names() == ['tinybot']
     np.testing.assert_array_equal(tinybot_state(crowded), before)
 
-    crowded.spawn_urdf('a', pile(40), position=(2.0, 0.0, 0.5))
-    crowded.spawn_urdf('b', pile(40), position=(-2.0, 0.0, 0.5))
+    spawn_robot(crowded, 'a', pile(40), position=(2.0, 0.0, 0.5))
+    spawn_robot(crowded, 'b', pile(40), position=(-2.0, 0.0, 0.5))
     drive([plain, crowded], 0.2, 0.4, 0.1)
     # Two piles in one place: MuJoCo runs out of memory for their contacts within a step.
     crowded.set_model_state('b', position=(2.0, 0.0, 0.5), orientation=(1.0, 0.0, 0.0, 0.0))

@@ -7,9 +7,12 @@ import mujoco
 import pytest
 from repository import read_model, ROOT
 from service_tutorial.sim.scenery import Scenery, SceneryError
+from service_tutorial.sim.validation import Reason
 from service_tutorial.sim.world import World
-from service_tutorial.sim.world_files import NO_RESOURCE, PARSE_ERROR, parse_world
-from service_tutorial.sim.world_files import read_world_file, UNSUPPORTED_FORMAT, WorldFileError
+from service_tutorial.sim.world_files import parse_world, read_world_file, WorldFileError
+from spawns import spawn_robot
+
+PARSE, MISSING, FORMAT = Reason.NOT_PARSEABLE, Reason.NO_RESOURCE, Reason.UNSUPPORTED_FORMAT
 
 
 def own_share(package):
@@ -50,31 +53,31 @@ def test_the_parking_spot_lies_in_front_of_the_crate_and_inside_its_bounds():
 
 
 @pytest.mark.parametrize('text, kind, named', [
-    ('<sdf/>', UNSUPPORTED_FORMAT, '<sdf>'),
-    ('<world name=" "/>', PARSE_ERROR, 'world name'),
-    ('<world><named_pose name="a"/><named_pose name="a"/></world>', PARSE_ERROR, 'twice'),
+    ('<sdf/>', FORMAT, '<sdf>'),
+    ('<world name=" "/>', PARSE, 'world name'),
+    ('<world><named_pose name="a"/><named_pose name="a"/></world>', PARSE, 'twice'),
     ('<world><model uri="package://service_tutorial/models/tinybot.urdf" pose="b"/></world>',
-     PARSE_ERROR, "pose 'b'"),
+     PARSE, "pose 'b'"),
     ('<world><named_pose name="a"><bounds type="box" min="0 0 0" max="1 0 1"/></named_pose>'
-     '</world>', PARSE_ERROR, 'below max'),
-    ('<world><named_pose name="a"><origin xyz="nan 0 0"/></named_pose></world>', PARSE_ERROR,
+     '</world>', PARSE, 'below max'),
+    ('<world><named_pose name="a"><origin xyz="nan 0 0"/></named_pose></world>', PARSE,
      'NaN'),
-    ('<world><named_pose name="a"><origin xyz="1e9 0 0"/></named_pose></world>', PARSE_ERROR,
+    ('<world><named_pose name="a"><origin xyz="1e9 0 0"/></named_pose></world>', PARSE,
      'beyond'),
-    ('<world><named_pose name="a"><bounds type="cone"/></named_pose></world>', PARSE_ERROR,
+    ('<world><named_pose name="a"><bounds type="cone"/></named_pose></world>', PARSE,
      'box or sphere'),
-    ('<world><scenery uri="package://service_tutorial/../etc/passwd"/></world>', NO_RESOURCE,
+    ('<world><scenery uri="package://service_tutorial/../etc/passwd"/></world>', MISSING,
      "'..'"),
-    ('<world><scenery uri="yard.urdf"/></world>', NO_RESOURCE, 'neither'),
-    ('<world><model uri="package://service_tutorial/models/none.urdf"/></world>', NO_RESOURCE,
+    ('<world><scenery uri="yard.urdf"/></world>', MISSING, 'neither'),
+    ('<world><model uri="package://service_tutorial/models/none.urdf"/></world>', MISSING,
      'names no file'),
-    ('<world>' + '<tag>t</tag>' * 5000 + '</world>', PARSE_ERROR, 'more than'),
-    ('<world><tag>' + 'x' * 300 + '</tag></world>', PARSE_ERROR, 'tag'),
+    ('<world>' + '<tag>t</tag>' * 5000 + '</world>', PARSE, 'more than'),
+    ('<world><tag>' + 'x' * 300 + '</tag></world>', PARSE, 'tag'),
 ])
 def test_a_bad_world_is_refused_with_what_is_wrong(text, kind, named):
     with pytest.raises(WorldFileError) as refused:
         parse_world(text, 'the world', None, own_share)
-    assert refused.value.kind == kind and named in str(refused.value)
+    assert refused.value.reason == kind and named in str(refused.value)
 
 
 def test_unknown_elements_are_listed_for_the_loader_to_judge():
@@ -90,12 +93,12 @@ def test_a_scenery_given_as_text_names_no_file():
               '</worldbody></mujoco>')
     with pytest.raises(SceneryError) as refused:
         Scenery.from_text(hinged, 'text')
-    assert refused.value.unsupported
+    assert refused.value.reason == Reason.UNSUPPORTED_CONTENT
 
 
 def test_a_world_loads_another_scenery_without_its_models_at_time_zero():
     world = World(scenery=os.path.join(ROOT, 'models', 'yard.urdf'))
-    world.spawn_urdf('tinybot', read_model('tinybot'))
+    spawn_robot(world, 'tinybot', read_model('tinybot'))
     world.step(100)
     parking = Scenery(os.path.join(ROOT, 'worlds', 'parking.xml'))
     world.load(parking)
@@ -104,7 +107,7 @@ def test_a_world_loads_another_scenery_without_its_models_at_time_zero():
              for index in range(world.model.ngeom)}
     assert {'scenery/wall', 'scenery/crate'} <= geoms
     # The tinybot spawned into the parking world stands at rest before the crate.
-    world.spawn_urdf('tinybot', read_model('tinybot'))
+    spawn_robot(world, 'tinybot', read_model('tinybot'))
     world.step(250)
     assert abs(world.get_model_state('tinybot').linear_velocity[0]) < 1e-3
     world.load(None)

@@ -4,12 +4,13 @@ import math
 
 import numpy as np
 from service_tutorial.sim.world import World
+from spawns import spawn_file
 
 
 def settled_world(name, path, *, steps=250, **world_options):
     """Return a world with one robot from a file, spawned at the origin and stepped to rest."""
     world = World(**world_options)
-    world.spawn_urdf_file(name, path)
+    spawn_file(world, name, path)
     world.step(steps)
     return world
 

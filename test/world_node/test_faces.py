@@ -4,6 +4,7 @@ from repository import model_path, TEST_MODELS, TINYBOT
 from service_tutorial.sim.world import World
 from service_tutorial.world_node.faces import FACES
 from service_tutorial.world_node.faces.face import PluginFace
+from spawns import spawn_file
 
 
 def test_every_face_declares_the_protocol_and_fills_in_what_it_does():
@@ -16,9 +17,9 @@ def test_every_face_declares_the_protocol_and_fills_in_what_it_does():
 
 def test_every_plugin_of_the_shipped_and_gazebo_robots_has_a_face():
     world = World()
-    world.spawn_urdf_file('tinybot', TINYBOT)
-    world.spawn_urdf_file('skidbot', model_path('skidbot_ros1', TEST_MODELS),
-                          position=(3.0, 0.0, 0.1))
+    spawn_file(world, 'tinybot', TINYBOT)
+    spawn_file(world, 'skidbot', model_path('skidbot_ros1', TEST_MODELS),
+               position=(3.0, 0.0, 0.1))
     carried = [plugin for model in world.models.values() for plugin in model.plugins]
     assert {type(plugin).__name__ for plugin in carried} >= {
         'DiffDrive', 'SkidSteer', 'RaySensor', 'CameraSensor', 'ImuSensor'}

@@ -339,6 +339,7 @@ def test_a_xacro_include_in_a_request_is_refused_and_never_read(fast_world, tmp_
         response = fast_world.spawn('sneaky', request, make_pose(0.0, 3.0, 0.5))
     assert not response.success
     assert response.status_message == (
-        'SpawnModel: model_xml contains xacro macros; run xacro on it first')
+        'SpawnModel: model_xml contains xacro macros, which a spawn never expands: run xacro on '
+        'it first, or name an installed .xacro file by its uri')
     assert opens.opened() == []
     assert fast_world.models() == ['tinybot']

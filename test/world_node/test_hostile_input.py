@@ -131,7 +131,7 @@ BAD_SPAWNS = [
      'model_xml does not parse as XML: Premature end of data in tag link line 1, line 1, '
      'column 32 (<string>, line 1)'),
     ('XML that is not URDF', 'newcomer', '<sdf version="1.6"><model name="m"/></sdf>', pose(), '',
-     '', 'model_xml is not URDF: root element is <sdf>'),
+     '', 'model_xml is SDF (root element <sdf>); here only urdf is taken'),
     ('URDF without links', 'newcomer', '<robot name="r"/>', pose(), '', '',
      'model_xml has no <link>'),
     ('joints that form a loop', 'newcomer',

@@ -10,7 +10,7 @@ import os
 
 import pytest
 from repository import read_model
-from service_tutorial.world_node.standard import spawnable_files
+from service_tutorial.sim.urdf.hardened_xml import MAX_MODEL_XML_BYTES
 from service_tutorial.world_node.standard.spawnable_files import FileWalk, LeftOut, NOT_READ
 from service_tutorial.world_node.standard.spawnable_files import RobotFileOffer
 from service_tutorial.world_node.standard.spawnable_files import RobotFileReader
@@ -108,25 +108,25 @@ def test_what_is_no_robot_is_left_out_with_the_reason(share):
     reader = RobotFileReader(resolver(share), lambda description: ['a thing'])
     folder = share / 'urdf'
     files = {
-        'broken.urdf': ('<robot name="b"><link name=', 'it does not parse as XML'),
-        'empty.urdf': ('', 'it does not parse as XML'),
+        'broken.urdf': ('<robot name="b"><link name=', "broken.urdf' does not parse as XML"),
+        'empty.urdf': ('', "empty.urdf' is empty"),
         'entity.urdf': ('<!DOCTYPE r [<!ENTITY e SYSTEM "file:///etc/passwd">]><robot/>',
                         'DOCTYPE or ENTITY declaration'),
         'props.xacro': ('<robot xmlns:xacro="http://www.ros.org/wiki/xacro">'
                         '<xacro:property name="p" value="1"/></robot>', 'it has no links'),
         'badmacro.urdf.xacro': ('<robot name="x" xmlns:xacro="http://www.ros.org/wiki/xacro">'
                                 '<xacro:nothing/></robot>', 'xacro cannot expand'),
-        'latin1.urdf': (None, 'it is not UTF-8 text'),
-        'sdf.urdf': ('<sdf version="1.9"/>', 'it is not URDF: its root element is <sdf>'),
+        'latin1.urdf': (None, 'is not UTF-8 text'),
+        'sdf.urdf': ('<sdf version="1.9"/>', 'is SDF (root element <sdf>)'),
         'massless.urdf': ('<robot name="m"><link name="body"><collision><geometry><box '
                           'size="1 1 1"/></geometry></collision></link></robot>',
-                          'mass and inertia of moving bodies'),
+                          'it does not compile: Error: mass and inertia of moving bodies'),
         'peeking.xml': ('<mujoco><asset><mesh file="/etc/secret.obj"/></asset></mujoco>',
-                        "it names file '/etc/secret.obj', which is not a plain path"),
-        'climbing.mjcf': ('<mujoco><compiler meshdir="../.."/></mujoco>',
-                          "it names file '../..', which is not a plain path"),
+                        "MJCF mesh file '/etc/secret.obj' lies outside"),
+        'climbing.mjcf': ('<mujoco><compiler meshdir="../.."/><asset><mesh file="a.obj"/>'
+                          '</asset></mujoco>', "MJCF mesh file 'a.obj' lies outside"),
         'linking.xml': ('<mujoco><asset><mesh file="linked/secret.obj"/></asset></mujoco>',
-                        'which leads outside the share folder of its package'),
+                        "MJCF mesh file 'linked/secret.obj' lies outside"),
     }
     for name, (text, reason) in files.items():
         if text is None:
@@ -139,9 +139,9 @@ def test_what_is_no_robot_is_left_out_with_the_reason(share):
     (folder / 'package.xml').write_text('<package format="3"/>')
     assert reader.read('package://pkg/urdf/package.xml', str(folder / 'package.xml')) is None
     with open(folder / 'huge.urdf', 'wb') as huge:
-        huge.truncate(spawnable_files.MAX_MODEL_XML_BYTES + 1)
+        huge.truncate(MAX_MODEL_XML_BYTES + 1)
     assert reader.read('package://pkg/urdf/huge.urdf', str(folder / 'huge.urdf')).reason == \
-        'it is larger than the limit of 10485760 bytes'
+        "uri 'package://pkg/urdf/huge.urdf' is larger than the limit of 10485760 bytes"
 
 
 def test_a_robot_says_its_plugins_and_whether_it_is_fixed(share):

@@ -101,12 +101,11 @@ def test_a_uri_is_read_only_from_inside_a_package_share(world, hostile_package):
 TINYBOT_NAME_TAKEN = {'name': 'tinybot', 'resource_string': CRATE}
 SPAWN_REFUSALS = [
     (TINYBOT_NAME_TAKEN, SpawnResult.NAME_NOT_UNIQUE,
-     "SpawnEntity: an entity named 'tinybot' already exists"),
+     "SpawnEntity: a model named 'tinybot' already exists"),
     ({'name': 'r2/d2', 'resource_string': CRATE}, SpawnResult.NAME_INVALID,
      "SpawnEntity: model name 'r2/d2' must not contain '/'"),
     ({'name': '', 'resource_string': NAMELESS}, SpawnResult.NAME_INVALID,
-     'SpawnEntity: the name is empty and the resource names no robot; give a name or allow '
-     'renaming'),
+     'SpawnEntity: model name must not be empty'),
     ({'name': 'x' * 300, 'resource_string': CRATE}, SpawnResult.NAME_INVALID,
      'characters) is longer than 64 characters'),
     ({'resource_string': '<sdf version="1.9"><model name="m"/></sdf>'},
@@ -156,13 +155,12 @@ SPAWN_REFUSALS = [
      "SpawnEntity: model 'crate' does not compile: inertia must satisfy"),
     ({'name': 'crate', 'resource_string': CRATE, 'initial_pose': stamped(float('nan'), 0.0, 0.5)},
      SpawnResult.INVALID_POSE,
-     'SpawnEntity: initial_pose: position contains NaN or infinity: [nan, 0.0, 0.5]'),
+     'SpawnEntity: position contains NaN or infinity: [nan, 0.0, 0.5]'),
     ({'name': 'crate', 'resource_string': CRATE, 'initial_pose': stamped(
         0.0, 0.0, 0.5, quaternion=(0.0, 0.0, 0.0, 0.0))}, SpawnResult.INVALID_POSE,
-     'SpawnEntity: initial_pose: orientation quaternion is zero: [0.0, 0.0, 0.0, 0.0]'),
+     'SpawnEntity: orientation quaternion is zero: [0.0, 0.0, 0.0, 0.0]'),
     ({'name': 'crate', 'resource_string': CRATE, 'initial_pose': stamped(frame='nowhere')},
-     SpawnResult.INVALID_POSE, "SpawnEntity: initial_pose names frame 'nowhere', which is "
-     'neither the world nor an entity'),
+     SpawnResult.INVALID_POSE, "SpawnEntity: unknown reference frame 'nowhere'"),
 ]
 
 

@@ -11,8 +11,8 @@ import time
 from geometry_msgs.msg import Vector3
 import pytest
 from repository import read_model
+from service_tutorial.world_node.answers import Refusal
 from service_tutorial.world_node.standard.entity_filters import EntityFilter
-from service_tutorial.world_node.standard.results import Refusal
 from simulation_interfaces.msg import Bounds, EntityCategory, EntityFilters, EntityInfo
 from simulation_interfaces.msg import Result, TagsFilter
 from simulation_interfaces.srv import GetEntitiesStates, SetEntityInfo

@@ -7,6 +7,7 @@ from service_tutorial.sim.world import World
 from service_tutorial.world_node.standard.entity_messages import EntityStates
 from simulation_interfaces.msg import EntityState, Result
 from simulation_interfaces.srv import SetEntityState
+from spawns import spawn_robot
 from standard_entities import close, CRATE, entity_state, red_box, snapshot, spawn_or_fail
 from standard_entities import stamped
 
@@ -117,7 +118,7 @@ def numbers(state):
 def test_kept_state_messages_are_refilled_with_each_call():
     world = World()
     for name, x in (('near', 0.0), ('far', 3.0)):
-        world.spawn_urdf(name, CRATE.replace('crate', name), position=(x, 0.0, 0.2))
+        spawn_robot(world, name, CRATE.replace('crate', name), position=(x, 0.0, 0.2))
     states = EntityStates(world)
 
     def in_world(name):

@@ -21,6 +21,7 @@ from simulation_interfaces.action import SimulateSteps
 from simulation_interfaces.msg import Result, SimulationState, SimulatorFeatures
 from simulation_interfaces.srv import GetSimulationState, GetSimulatorFeatures
 from simulation_interfaces.srv import ResetSimulation, SetSimulationState, StepSimulation
+from spawns import spawn_file
 
 pytestmark = pytest.mark.ros
 
@@ -315,7 +316,7 @@ def test_a_driven_tinybot_moves_as_in_normal_stepping_with_its_odometry(paused_w
     end = sim_time(world)
     # The same in a world of the core, stepped as it runs: commanded after the first steps.
     reference = World()
-    reference.spawn_urdf_file('tinybot', TINYBOT)
+    spawn_file(reference, 'tinybot', TINYBOT)
     reference.step(round(commanded_at / TIMESTEP))
     reference.models['tinybot'].drive().command_velocity(0.3, 0.5)
     reference.step(steps)

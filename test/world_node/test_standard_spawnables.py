@@ -129,11 +129,13 @@ def test_an_installed_turtlebot3_xacro_is_offered_spawns_and_drives(ros, my_desc
     assert PROPERTIES_URI not in robots
     message = response.result.error_message
     assert f'{PROPERTIES_URI}: it has no links: it is macros or properties' in message
-    # The MJCF pendulum is offered with its name, actuator and sensor; package.xml is no robot.
+    # The MJCF pendulum is offered with its name, actuator and joint states; package.xml is no
+    # robot. Its bounds are in the frame of its top body, as a spawned entity's are: the arm
+    # (at z = 1 in its file) hangs 0.6 m below its hinge.
     assert robots['package://my_description/mjcf/pendulum.xml'].description == \
-        'pendulum: MJCF, 1 actuators, 1 sensors'
+        'pendulum: MJCF, 1 actuators; a joint state publisher on joint_states; fixed to the world'
     assert same_box(corners(robots['package://my_description/mjcf/pendulum.xml'].spawn_bounds),
-                    ((-0.05, -0.1, 0.4), (0.05, 0.1, 1.0)))
+                    ((-0.05, -0.1, -0.6), (0.05, 0.1, 0.0)))
     assert not any('package.xml' in uri for uri in robots) and 'package.xml' not in message
     # extra/ is no robot folder: its crate only comes as a source.
     assert 'package://my_description/extra/crate.urdf' not in robots
@@ -242,9 +244,10 @@ def test_malformed_huge_and_escaping_robot_files_are_left_out_with_a_note(ros, m
     assert MY_ROBOT_URI in robots and TINYBOT_URI in robots
     assert opens.opened() == []
     assert '7 robot files are left out: ' in message, message
-    for name, reason in [('urdf/broken.urdf', 'it does not parse as XML'),
-                         ('urdf/huge.urdf', 'it is larger than the limit of 10485760 bytes')]:
-        assert f'package://my_description/{name}: {reason}' in message
+    for name, reason in [('urdf/broken.urdf', 'does not parse as XML'),
+                         ('urdf/huge.urdf', 'is larger than the limit of 10485760 bytes')]:
+        uri = f'package://my_description/{name}'
+        assert f"{uri}: uri '{uri}' {reason}" in message
     for name in ('broken.urdf', 'huge.urdf', 'no_wheels.urdf.xacro', 'common_properties.xacro',
                  'peeking.xml', 'climbing.xml', 'including.xml'):
         assert not any(uri.endswith(name) for uri in robots), name

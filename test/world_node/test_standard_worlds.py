@@ -336,7 +336,7 @@ def test_every_hostile_world_is_refused_and_the_world_stays_exactly(world, world
              ('<mujoco><worldbody><body><joint type="hinge"/><geom size="1"/></body>'
               '</worldbody></mujoco>', LoadWorld.Response.UNSUPPORTED_ASSETS),
              ('<mujoco><asset><mesh file="/etc/hostname"/></asset></mujoco>',
-              LoadWorld.Response.RESOURCE_PARSE_ERROR),
+              LoadWorld.Response.UNSUPPORTED_ASSETS),
              ('<mujoco><include file="other.xml"/></mujoco>',
               LoadWorld.Response.UNSUPPORTED_ASSETS),
              ('not xml at all', LoadWorld.Response.RESOURCE_PARSE_ERROR),

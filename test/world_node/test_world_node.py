@@ -9,7 +9,9 @@ from repository import read_model
 from running_world import lesson_pose
 from sensor_msgs.msg import JointState
 from service_tutorial.conversions import make_pose, seconds_of as seconds, yaw_of
+from service_tutorial.sim.spawning import SpawnOrder
 from service_tutorial.sim.world import World
+from spawns import spawn_robot
 from srv_interfaces.srv import SetModelState
 
 pytestmark = pytest.mark.ros
@@ -18,7 +20,7 @@ pytestmark = pytest.mark.ros
 def resting_height_of_r2d2():
     """Where R2-D2's base ends up after a long drop in a world of its own."""
     world = World()
-    world.spawn_urdf('r2d2', read_model('r2d2'), position=(0, 0, 1))
+    spawn_robot(world, 'r2d2', read_model('r2d2'), position=(0, 0, 1))
     world.step(int(5.0 / world.timestep))
     return world.get_model_state('r2d2').position[2]
 
@@ -264,12 +266,12 @@ def test_a_model_deleted_before_its_topics_are_made_leaves_none_behind(rclpy_ses
             return ({publisher.topic_name for publisher in publishers}
                     | {subscription.topic_name for subscription in node.subscriptions})
 
-        identity = (1.0, 0.0, 0.0, 0.0)
-        node.spawn_model('tiny', read_model('tinybot'), 'tiny', (2.0, 0.0, 0.0), identity, '')
+        tiny = SpawnOrder('tiny', read_model('tinybot'), position=(2.0, 0.0, 0.0))
+        assert node.spawn_models([tiny], ['tiny']) == ['']
         assert not {topic for topic in topics() if topic.startswith('/tiny/')}, \
             'the topics are made once the spawn is answered'
         node.delete_model('tiny')
-        node.spawn_model('tiny', read_model('tinybot'), 'other', (2.0, 0.0, 0.0), identity, '')
+        assert node.spawn_models([tiny], ['other']) == ['']
         node.make_model_topics()
         # The first 'tiny' left before its topics were made; the second has its own only.
         assert not {topic for topic in topics() if topic.startswith('/tiny/')}

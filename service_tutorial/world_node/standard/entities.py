@@ -8,16 +8,17 @@ description and tags live on the core Model, so they go when it goes. A spawn or
 simulation time while it runs, as the lesson's do.
 """
 
-from ament_index_python.packages import get_package_share_directory
 from service_tutorial.conversions import pose_from_msg, twist_from_msg
 from service_tutorial.sim import frames
 from service_tutorial.sim import validation
-from service_tutorial.sim.validation import AssetError, DescriptionError, quoted, WorldError
+from service_tutorial.sim.validation import quoted, WorldError
+from service_tutorial.world_node.answers import raise_refusal, Refusal, SPAWN_CODES
+from service_tutorial.world_node.answers import standard_answer
+from service_tutorial.world_node.packages import package_share
 from service_tutorial.world_node.standard.entity_filters import EntityFilter
 from service_tutorial.world_node.standard.entity_messages import CATEGORIES, entity_info
 from service_tutorial.world_node.standard.entity_messages import EntityStates
 from service_tutorial.world_node.standard.entity_messages import fill_entity_bounds
-from service_tutorial.world_node.standard.results import answer, Refusal
 from service_tutorial.world_node.standard.spawn_requests import SpawnPlanner
 from simulation_interfaces.msg import EntityCategory, EntityInfo, Result
 from simulation_interfaces.msg import SimulatorFeatures, SpawnResult
@@ -47,7 +48,7 @@ class EntityServices:
         SimulatorFeatures.ENTITY_INFO_SETTING, SimulatorFeatures.SPAWNING_ENTITIES)
     SPAWN_FORMATS = ('urdf', 'mjcf')
 
-    def __init__(self, node, package_share=get_package_share_directory):
+    def __init__(self, node, package_share=package_share):
         """Serve node's world under names relative to node's namespace (/spawn_entity...)."""
         self.node = node
         self.world = node.world
@@ -86,11 +87,11 @@ class EntityServices:
                 resource_string=request.resource_string,
                 entity_namespace=request.entity_namespace, initial_pose=request.initial_pose)
             outcome, = self.node.spawn_models([planned.order], [planned.namespace])
-            left_out = _spawned(outcome)
+            left_out = raise_refusal(outcome)
             response.entity_name = planned.order.name
             return left_out
-        left_out = answer(self.node, 'SpawnEntity', response.result,
-                          self.node.holding_time(spawn))
+        left_out = standard_answer(self.node, 'SpawnEntity', response.result,
+                                   self.node.holding_time(spawn), SPAWN_CODES)
         if left_out:
             response.result.error_message = left_out
         return response
@@ -104,26 +105,30 @@ class EntityServices:
                               f'requests are more than {MAX_SPAWN_REQUESTS} in one call')
             planner = SpawnPlanner(self.world, self.package_share)
             response.results = [SpawnResult() for _ in requests]
-            planned = [answer(self.node, 'SpawnEntities', result.result, lambda spawn=spawn:
-                              planner.plan(name=spawn.name,
-                                           allow_renaming=spawn.allow_renaming,
-                                           uri=spawn.entity_resource.uri,
-                                           resource_string=spawn.entity_resource.resource_string,
-                                           entity_namespace=spawn.entity_namespace,
-                                           initial_pose=spawn.initial_pose))
-                       for spawn, result in zip(requests, response.results)]
-            ready = [(index, plan) for index, plan in enumerate(planned) if plan is not None]
+
+            def planned(spawn):
+                return planner.plan(
+                    name=spawn.name, allow_renaming=spawn.allow_renaming,
+                    uri=spawn.entity_resource.uri,
+                    resource_string=spawn.entity_resource.resource_string,
+                    entity_namespace=spawn.entity_namespace, initial_pose=spawn.initial_pose)
+            plans = [standard_answer(self.node, 'SpawnEntities', result.result,
+                                     lambda spawn=spawn: planned(spawn), SPAWN_CODES)
+                     for spawn, result in zip(requests, response.results)]
+            ready = [(index, plan) for index, plan in enumerate(plans) if plan is not None]
             outcomes = self.node.spawn_models([plan.order for _, plan in ready],
                                               [plan.namespace for _, plan in ready])
             for (index, plan), outcome in zip(ready, outcomes):
                 result = response.results[index]
-                left_out = answer(self.node, 'SpawnEntities', result.result,
-                                  lambda outcome=outcome: _spawned(outcome))
+                left_out = standard_answer(self.node, 'SpawnEntities', result.result,
+                                           lambda outcome=outcome: raise_refusal(outcome),
+                                           SPAWN_CODES)
                 if result.result.result == Result.RESULT_OK:
                     result.entity_name = plan.order.name
                     result.result.error_message = left_out or ''
             _check_batch(response.results)
-        answer(self.node, 'SpawnEntities', response.result, self.node.holding_time(spawn_all))
+        standard_answer(self.node, 'SpawnEntities', response.result,
+                        self.node.holding_time(spawn_all))
         return response
 
     def delete_entity_callback(self, request, response):
@@ -131,7 +136,7 @@ class EntityServices:
         def delete():
             self._model(request.entity)
             self.node.delete_model(request.entity)
-        answer(self.node, 'DeleteEntity', response.result, self.node.holding_time(delete))
+        standard_answer(self.node, 'DeleteEntity', response.result, self.node.holding_time(delete))
         return response
 
     # --- lists and states ---------------------------------------------------------------------
@@ -140,7 +145,7 @@ class EntityServices:
         """List the entities that pass every filter, in spawn order."""
         def listed():
             response.entities = self._filtered(request.filters)
-        answer(self.node, 'GetEntities', response.result, listed)
+        standard_answer(self.node, 'GetEntities', response.result, listed)
         return response
 
     def get_entities_states_callback(self, request, response):
@@ -149,7 +154,7 @@ class EntityServices:
             names = self._filtered(request.filters)
             response.states = self.states(names)
             response.entities = names
-        answer(self.node, 'GetEntitiesStates', response.result, listed)
+        standard_answer(self.node, 'GetEntitiesStates', response.result, listed)
         return response
 
     def get_entity_state_callback(self, request, response):
@@ -157,13 +162,13 @@ class EntityServices:
         def read():
             self._model(request.entity)
             response.state, = self.state([request.entity])
-        answer(self.node, 'GetEntityState', response.result, read)
+        standard_answer(self.node, 'GetEntityState', response.result, read)
         return response
 
     def set_entity_state_callback(self, request, response):
         """Set an entity's pose and twist at once, in the world or relative to another entity."""
-        answer(self.node, 'SetEntityState', response.result,
-               lambda: self._set_state(request.entity, request.state))
+        standard_answer(self.node, 'SetEntityState', response.result,
+                        lambda: self._set_state(request.entity, request.state))
         return response
 
     def _set_state(self, name, state):
@@ -195,7 +200,7 @@ class EntityServices:
         """Report an entity's category, description and tags."""
         def read():
             response.info = entity_info(self._model(request.entity))
-        answer(self.node, 'GetEntityInfo', response.result, read)
+        standard_answer(self.node, 'GetEntityInfo', response.result, read)
         return response
 
     def set_entity_info_callback(self, request, response):
@@ -203,14 +208,14 @@ class EntityServices:
         def write():
             model = self._model(request.entity)
             model.entity_info = _checked_info(request.info)
-        answer(self.node, 'SetEntityInfo', response.result, write)
+        standard_answer(self.node, 'SetEntityInfo', response.result, write)
         return response
 
     def get_entity_bounds_callback(self, request, response):
         """Report the box around an entity's collision geometry, in its base link's frame."""
         def read():
             fill_entity_bounds(response.bounds, self.world, self._model(request.entity))
-        answer(self.node, 'GetEntityBounds', response.result, read)
+        standard_answer(self.node, 'GetEntityBounds', response.result, read)
         return response
 
     # --- shared -------------------------------------------------------------------------------
@@ -227,18 +232,6 @@ class EntityServices:
         entity_filter = EntityFilter(filters, self.world)
         return [name for name, model in self.world.models.items()
                 if entity_filter.matches(model)]
-
-
-def _spawned(outcome):
-    """Return what the world left out of a spawned entity, or raise why it was refused."""
-    if isinstance(outcome, AssetError):
-        raise Refusal(SpawnResult.MISSING_ASSETS if outcome.missing
-                      else SpawnResult.UNSUPPORTED_ASSETS, str(outcome))
-    if isinstance(outcome, DescriptionError):
-        raise Refusal(SpawnResult.RESOURCE_PARSE_ERROR, str(outcome))
-    if isinstance(outcome, Exception):
-        raise outcome
-    return outcome
 
 
 def _check_batch(results):

@@ -12,9 +12,9 @@ import math
 import numpy as np
 from service_tutorial.sim import bounds
 from service_tutorial.sim.validation import quoted
+from service_tutorial.world_node.answers import Refusal
 from service_tutorial.world_node.standard.entity_messages import entity_info
 from service_tutorial.world_node.standard.name_patterns import NamePattern, PatternError
-from service_tutorial.world_node.standard.results import Refusal
 from simulation_interfaces.msg import Bounds, Result, TagsFilter
 
 # More points than a hull needs; beyond it a request is refused before any work.

@@ -9,8 +9,8 @@ answers TYPE_EMPTY. In the no-world state there are no named poses.
 
 from geometry_msgs.msg import Point, Pose, Quaternion, Vector3
 from service_tutorial.sim.validation import quoted
+from service_tutorial.world_node.answers import Refusal, standard_answer
 from service_tutorial.world_node.standard.entity_filters import tags_test
-from service_tutorial.world_node.standard.results import answer, Refusal
 from simulation_interfaces.msg import Bounds, NamedPose, Result, SimulatorFeatures
 from simulation_interfaces.srv import GetNamedPoseBounds, GetNamedPoses
 
@@ -38,7 +38,7 @@ class NamedPoseServices:
             matches = tags_test(request.tags)
             response.poses = [named_pose_msg(pose) for pose in self.loader.named_poses.values()
                               if matches is None or matches(set(pose.tags))]
-        answer(self.node, 'GetNamedPoses', response.result, listed)
+        standard_answer(self.node, 'GetNamedPoses', response.result, listed)
         return response
 
     def get_named_pose_bounds_callback(self, request, response):
@@ -57,7 +57,7 @@ class NamedPoseServices:
                 raise Refusal(Result.RESULT_NOT_FOUND, f'no named pose {shown}: {where}')
             response.bounds = Bounds(type=BOUNDS_TYPES[pose.bounds_type], points=[
                 Vector3(x=x, y=y, z=z) for x, y, z in pose.bounds_points])
-        answer(self.node, 'GetNamedPoseBounds', response.result, bounds)
+        standard_answer(self.node, 'GetNamedPoseBounds', response.result, bounds)
         return response
 
 

@@ -23,7 +23,7 @@ round. Where the standard leaves a choice:
 """
 
 from rclpy.parameter import Parameter
-from service_tutorial.world_node.standard.results import answer, Refusal
+from service_tutorial.world_node.answers import Refusal, standard_answer
 from simulation_interfaces.msg import Result, SimulationState, SimulatorFeatures
 from simulation_interfaces.srv import GetSimulationState, ResetSimulation, SetSimulationState
 
@@ -92,8 +92,8 @@ class SimulationServices:
 
     def set_simulation_state_callback(self, request, response):
         """Play, pause, stop or quit, as far as the transition is allowed."""
-        answer(self.node, 'SetSimulationState', response.result,
-               lambda: self.change_state(request.state.state))
+        standard_answer(self.node, 'SetSimulationState', response.result,
+                        lambda: self.change_state(request.state.state))
         return response
 
     def change_state(self, target):
@@ -147,8 +147,8 @@ class SimulationServices:
 
     def reset_simulation_callback(self, request, response):
         """Reset time, state, spawned entities, or any of them together."""
-        answer(self.node, 'ResetSimulation', response.result,
-               lambda: self.reset(request.scope))
+        standard_answer(self.node, 'ResetSimulation', response.result,
+                        lambda: self.reset(request.scope))
         return response
 
     def reset(self, scope):

@@ -3,10 +3,13 @@ The robot files of installed ament packages that a spawn uri may name, found and
 
 A robot file lies in a package share's urdf/, models/ or mjcf/ folder (or a folder a request
 names as a source), at most MAX_DEPTH folders below it: a .urdf, a .xacro expanded with its
-default arguments, or an MJCF .xml/.mjcf whose root is <mujoco>. The same roots as a spawn
-uri's hold (resources.py): a source is package://<package>/<folder> or file://<folder> in an
-installed share, with no '..'; links to folders are not followed, a file whose link leads out of
-its share is left out unread. Reading a file (expanding, building, compiling it alone) is kept
+default arguments, or an MJCF .xml/.mjcf whose root is <mujoco>. A file is read and built by
+the same reader and the same format loader as a spawn by its uri (sim/robot_files.py,
+sim/description_formats.py), so a file is offered exactly when a spawn would take it, and one
+left out says the spawn's own reason. The same roots as a spawn uri's hold: a source is
+package://<package>/<folder> or file://<folder> in an installed share, with no '..'; links to
+folders are not followed, a file whose link leads out of its share is left out unread.
+Reading a file (expanding, building, compiling it alone) is kept
 under its uri, real path, modification time and size, so a second call costs only the walk;
 a call reads new files for READING_SECONDS at most and leaves the rest to the next, so a world
 with many packages is not held up for long. (A xacro file whose includes change while it does
@@ -21,17 +24,12 @@ import math
 import os
 import time
 
-from ament_index_python.packages import get_packages_with_prefixes
-import mujoco
-import numpy as np
-from service_tutorial.robot_files import expand_xacro, file_model_name, is_xacro
-from service_tutorial.robot_files import RobotFileError
 from service_tutorial.sim import bounds
-from service_tutorial.sim.description import UrdfError
+from service_tutorial.sim.description_formats import FORMATS
 from service_tutorial.sim.package_files import confined_path, PackageFileError, within
-from service_tutorial.sim.urdf.builder import load_urdf
-from service_tutorial.sim.urdf.hardened_xml import MAX_MODEL_XML_BYTES, parse_xml
-from service_tutorial.sim.validation import quoted
+from service_tutorial.sim.robot_files import file_model_name, read_uri
+from service_tutorial.sim.urdf.hardened_xml import parse_xml
+from service_tutorial.sim.validation import Reason, WorldError
 
 ROBOT_FOLDERS = ('urdf', 'models', 'mjcf')
 URDF_EXTENSIONS = ('.urdf', '.xacro')
@@ -41,10 +39,6 @@ MAX_SOURCES = 32
 MAX_FILES = 500  # robot files one call reads or takes from the cache
 MAX_ENTRIES = 20000  # folder entries one call looks at
 CACHED_FILES = 2000
-# MJCF attributes that name files or folders MuJoCo reads.
-MJCF_FILE_ATTRIBUTES = ('file', 'fileback', 'filedown', 'filefront', 'fileleft', 'fileright',
-                        'fileup', 'meshdir', 'texturedir', 'assetdir')
-MAX_MJCF_INCLUDES = 20
 # Wall time one call spends reading files it has not read before; the rest wait for a next call.
 READING_SECONDS = 5.0
 # What read() returns for a file left for a next call.
@@ -72,16 +66,6 @@ class LeftOut:
     reason: str
 
 
-def package_shares():
-    """Return {package: real share folder} of every installed ament package, by name."""
-    shares = {}
-    for package, prefix in sorted(get_packages_with_prefixes().items()):
-        share = os.path.join(prefix, 'share', package)
-        if _valid_package(package) and os.path.isdir(share):
-            shares[package] = os.path.realpath(share)
-    return shares
-
-
 def source_folder(source, shares):
     """
     Return (package, real share, real folder) of a source, or raise SourceRefused.
@@ -96,11 +80,6 @@ def source_folder(source, shares):
     package, share = max(((package, share) for package, share in shares.items()
                           if within(folder, share)), key=lambda held: len(held[1]))
     return package, share, folder
-
-
-def _valid_package(package):
-    return bool(package) and all(character.isalnum() or character == '_'
-                                 for character in package)
 
 
 class FileWalk:
@@ -198,107 +177,39 @@ class RobotFileReader:
             return self._kept[key]
         if time.monotonic() > deadline:
             return NOT_READ
-        answer = self._read_new(uri, path, status.st_size)
+        answer = self._read_new(uri, path)
         self._kept[key] = answer
         while len(self._kept) > self._size:
             self._kept.popitem(last=False)
         return answer
 
-    def _read_new(self, uri, path, size):
-        if size > MAX_MODEL_XML_BYTES:
-            return LeftOut(uri, f'it is larger than the limit of {MAX_MODEL_XML_BYTES} bytes')
+    def _read_new(self, uri, path):
         try:
-            with open(path, 'rb') as robot_file:
-                data = robot_file.read(MAX_MODEL_XML_BYTES + 1)
-            text = data.decode('utf-8')
-        except OSError as error:
-            return LeftOut(uri, f'it cannot be read: {error.strerror}')
-        except UnicodeDecodeError:
-            return LeftOut(uri, 'it is not UTF-8 text')
-        try:
-            if path.lower().endswith(MJCF_EXTENSIONS):
-                return self._read_mjcf(uri, path, data)
-            return self._read_urdf(uri, path, text)
-        except (UrdfError, RobotFileError, ValueError) as error:
+            robot = read_uri(uri, self._package_resolver)
+        except WorldError as error:
+            if error.reason == Reason.UNSUPPORTED_FORMAT and path.lower().endswith(
+                    MJCF_EXTENSIONS):
+                return None  # an .xml file of another kind: no robot file
             return LeftOut(uri, _one_line(error))
-
-    def _read_urdf(self, uri, path, text):
-        if is_xacro(path, text):
-            text = expand_xacro(path)
-        root = parse_xml(text.encode('utf-8'), 'it')
-        if root.tag != 'robot':
-            return LeftOut(uri, f'it is not URDF: its root element is <{root.tag[:40]}>')
-        if root.find('link') is None:
+        if robot.model_format == 'urdf' and parse_xml(robot.text.encode(), uri).find(
+                'link') is None:
             return LeftOut(uri, 'it has no links: it is macros or properties for other files')
-        description = load_urdf(text, base_dir=os.path.dirname(path),
-                                package_resolver=self._package_resolver)
+        try:
+            description = FORMATS[robot.model_format].load(
+                robot.text, base_dir=robot.base_dir, package_resolver=self._package_resolver)
+        except WorldError as error:
+            return LeftOut(uri, _one_line(error))
+        try:  # compiled alone, as a spawn compiles it into the world
+            box = bounds.description_box(description)
+        except ValueError as error:  # MuJoCo's compiler
+            return LeftOut(uri, f'it does not compile: {_one_line(error)}')
         name = description.robot_name or file_model_name(path)
         words = list(self._plugin_words(description)) or ['no drive or sensors']
+        if robot.model_format == 'mjcf':
+            words.insert(0, f'MJCF, {len(description.actuators)} actuators')
         if description.anchored:
             words.append('fixed to the world')
-        return RobotFileOffer(uri, f'{name}: {"; ".join(words)}',
-                              bounds.description_box(description))
-
-    def _read_mjcf(self, uri, path, data):
-        root = parse_xml(data, 'it')
-        if root.tag != 'mujoco':
-            return None  # an .xml file of another kind: no robot file
-        share = _share_of(path, self._package_resolver, uri)
-        _check_mjcf_files(root, os.path.dirname(path), share, uri, set())
-        spec = mujoco.MjSpec.from_file(path)
-        mj_model = spec.compile()
-        data = mujoco.MjData(mj_model)
-        mujoco.mj_kinematics(mj_model, data)
-        colliding = np.flatnonzero((mj_model.geom_contype != 0)
-                                   | (mj_model.geom_conaffinity != 0))
-        box = bounds.box_in_body_frame(bounds.geom_boxes(mj_model, data, colliding), data, 0)
-        name = spec.modelname or file_model_name(path)
-        return RobotFileOffer(uri, f'{name}: MJCF, {mj_model.nu} actuators, '
-                              f'{mj_model.nsensor} sensors', box)
-
-
-def _share_of(path, package_resolver, uri):
-    package = uri[len('package://'):].partition('/')[0]
-    return os.path.realpath(package_resolver(package))
-
-
-def _check_mjcf_files(root, folder, share, uri, seen):
-    """Refuse an MJCF file that names a file outside its share, also through its includes."""
-    named = [(element, attribute, element.get(attribute)) for element in root.iter()
-             if isinstance(element.tag, str) for attribute in MJCF_FILE_ATTRIBUTES
-             if element.get(attribute) is not None]
-    for _, _, value in named:
-        if value.startswith('/') or ':' in value or '..' in value.split('/') or '\0' in value:
-            raise ValueError(f'it names file {quoted(value)}, which is not a plain path inside '
-                             'its folder')
-    # A file may be read from the model's folder or from below its meshdir, texturedir...
-    bases = [folder] + [os.path.join(folder, value) for _, attribute, value in named
-                        if attribute.endswith('dir')]
-    for element, attribute, value in named:
-        for base in bases:
-            target = os.path.realpath(os.path.join(base, value))
-            if not within(target, share):
-                raise ValueError(f'it names file {quoted(value)}, which leads outside the share '
-                                 'folder of its package')
-        if element.tag == 'include' and attribute == 'file':
-            _check_include(os.path.realpath(os.path.join(folder, value)), folder, share, uri,
-                           seen)
-
-
-def _check_include(target, folder, share, uri, seen):
-    if target in seen:
-        return
-    seen.add(target)
-    if len(seen) > MAX_MJCF_INCLUDES:
-        raise ValueError(f'it includes more than {MAX_MJCF_INCLUDES} files')
-    try:
-        if os.path.getsize(target) > MAX_MODEL_XML_BYTES:
-            raise ValueError(f'it includes a file larger than {MAX_MODEL_XML_BYTES} bytes')
-        with open(target, 'rb') as included:
-            data = included.read(MAX_MODEL_XML_BYTES + 1)
-    except OSError as error:
-        raise ValueError(f'it includes a file that cannot be read: {error.strerror}') from None
-    _check_mjcf_files(parse_xml(data, 'an included file'), folder, share, uri, seen)
+        return RobotFileOffer(uri, f'{name}: {"; ".join(words)}', box)
 
 
 def _one_line(error):

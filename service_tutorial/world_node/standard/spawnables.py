@@ -20,13 +20,12 @@ answer is still RESULT_OK, as the standard has it ("not fatal").
 import os
 import time
 
-from ament_index_python.packages import get_package_share_directory
 from geometry_msgs.msg import Vector3
 from service_tutorial.sim import plugins
 from service_tutorial.sim.validation import WorldError
+from service_tutorial.world_node.answers import standard_answer
 from service_tutorial.world_node.faces import FACES
-from service_tutorial.world_node.standard import spawnable_files
-from service_tutorial.world_node.standard.results import answer
+from service_tutorial.world_node.packages import installed_shares, package_share
 from service_tutorial.world_node.standard.spawnable_files import FileWalk, LeftOut
 from service_tutorial.world_node.standard.spawnable_files import MAX_SOURCES, NOT_READ
 from service_tutorial.world_node.standard.spawnable_files import READING_SECONDS
@@ -45,8 +44,7 @@ class SpawnableServices:
 
     FEATURES = (SimulatorFeatures.SPAWNABLES,)
 
-    def __init__(self, node, *, package_share=get_package_share_directory,
-                 shares=spawnable_files.package_shares):
+    def __init__(self, node, *, package_share=package_share, shares=installed_shares):
         """Serve get_spawnables relative to node's namespace, leaving out the world's scenery."""
         self.node = node
         self.shares = shares
@@ -56,8 +54,9 @@ class SpawnableServices:
 
     def get_spawnables_callback(self, request, response):
         """List the robot files of the installed packages and of the sources asked for."""
-        notes = answer(self.node, 'GetSpawnables', response.result,
-                       self.node.holding_time(lambda: self._list(request.sources, response)))
+        notes = standard_answer(
+            self.node, 'GetSpawnables', response.result,
+            self.node.holding_time(lambda: self._list(request.sources, response)))
         if notes:
             response.result.error_message = 'GetSpawnables: ' + '; '.join(notes)
         return response

@@ -20,7 +20,7 @@ import math
 
 from rclpy.action import ActionServer, CancelResponse
 from rclpy.callback_groups import ReentrantCallbackGroup
-from service_tutorial.world_node.standard.results import answer, Refusal
+from service_tutorial.world_node.answers import Refusal, standard_answer
 from service_tutorial.world_node.standard.simulation import state_name
 from simulation_interfaces.action import SimulateSteps
 from simulation_interfaces.msg import Result, SimulationState, SimulatorFeatures
@@ -90,11 +90,11 @@ class SteppingServices:
 
     async def step_simulation_callback(self, request, response):
         """Take request.steps steps of a paused world; answer when they are taken."""
-        stepping = answer(self.node, 'StepSimulation', response.result,
-                          lambda: self.start(request.steps, MAX_SERVICE_STEPS))
+        stepping = standard_answer(self.node, 'StepSimulation', response.result,
+                                   lambda: self.start(request.steps, MAX_SERVICE_STEPS))
         if stepping is not None:
             why = await stepping.future
-            answer(self.node, 'StepSimulation', response.result, lambda: ended(why))
+            standard_answer(self.node, 'StepSimulation', response.result, lambda: ended(why))
         return response
 
     def cancel_callback(self, goal_handle):
@@ -108,7 +108,7 @@ class SteppingServices:
         def progress(taken, remaining):
             goal_handle.publish_feedback(SimulateSteps.Feedback(
                 completed_steps=taken, remaining_steps=remaining))
-        stepping = answer(
+        stepping = standard_answer(
             self.node, 'SimulateSteps', result.result,
             lambda: self.start(goal_handle.request.steps, math.inf, progress=progress,
                                cancelled=lambda: goal_handle.is_cancel_requested))
@@ -116,7 +116,7 @@ class SteppingServices:
             goal_handle.abort()
             return result
         why = await stepping.future
-        answer(self.node, 'SimulateSteps', result.result, lambda: ended(why))
+        standard_answer(self.node, 'SimulateSteps', result.result, lambda: ended(why))
         if why is None:
             goal_handle.succeed()
         elif goal_handle.is_cancel_requested:

@@ -22,32 +22,18 @@ changes nothing. Where the standard leaves a choice:
 
 import os
 
-from ament_index_python.packages import get_packages_with_prefixes
 from service_tutorial.sim.package_files import confined_path, package_uri, PackageFileError
-from service_tutorial.sim.scenery import SceneryError
-from service_tutorial.sim.urdf.hardened_xml import MAX_MODEL_XML_BYTES, parse_xml
-from service_tutorial.sim.validation import quoted, WorldError
-from service_tutorial.sim.world_files import NO_RESOURCE, PARSE_ERROR, parse_world
-from service_tutorial.sim.world_files import read_world_file, UNSUPPORTED_FORMAT
-from service_tutorial.sim.world_files import WORLD_FILE_SUFFIX, WorldFile, WorldFileError
+from service_tutorial.sim.validation import quoted, Reason, WorldError
+from service_tutorial.sim.world_files import parse_world, read_world_file
+from service_tutorial.sim.world_files import WORLD_FILE_SUFFIX
+from service_tutorial.world_node.answers import LOAD_WORLD_CODES, Refusal, standard_answer
+from service_tutorial.world_node.packages import installed_shares
 from service_tutorial.world_node.standard.entity_filters import tags_test
-from service_tutorial.world_node.standard.results import answer, Refusal
-from service_tutorial.world_node.world_loader import LoadedWorld, MISSING_ASSETS
-from service_tutorial.world_node.world_loader import MODEL_REFUSED, WORLDS_FOLDER
+from service_tutorial.world_node.world_loader import LoadedWorld, WORLDS_FOLDER
 from simulation_interfaces.msg import Resource, Result, SimulatorFeatures, WorldResource
 from simulation_interfaces.srv import GetAvailableWorlds, GetCurrentWorld, LoadWorld
 from simulation_interfaces.srv import UnloadWorld
 
-CODES = {
-    UNSUPPORTED_FORMAT: LoadWorld.Response.UNSUPPORTED_FORMAT,
-    NO_RESOURCE: LoadWorld.Response.NO_RESOURCE,
-    PARSE_ERROR: LoadWorld.Response.RESOURCE_PARSE_ERROR,
-    MISSING_ASSETS: LoadWorld.Response.MISSING_ASSETS,
-    MODEL_REFUSED: Result.RESULT_OPERATION_FAILED,
-}
-# Scenery files load as worlds of their own; other simulators' formats are named.
-SCENERY_ROOTS = ('robot', 'mujoco')
-OTHER_FORMATS = {'sdf': 'SDF', 'gazebo': 'SDF'}
 MAX_SOURCES = 100
 MAX_WORLD_FILES = 1000  # of one folder
 
@@ -83,7 +69,7 @@ class WorldServices:
                 raise Refusal(LoadWorld.Response.UNSUPPORTED_ELEMENTS,
                               f'world {quoted(loaded.world.name)} has elements this world does '
                               f'not support: {", ".join(ignored[:10])}')
-            prepared = self._prepared(loaded)
+            prepared = self.loader.prepare(loaded)
             self.loader.load(prepared)
             self.simulation.stopped = True
             self.node.after_reset()
@@ -91,7 +77,8 @@ class WorldServices:
             self.node.get_logger().info(f'LoadWorld: loaded world {quoted(loaded.world.name)}')
             return f'ignored: {", ".join(ignored[:10])}' if ignored else ''
         before = self.loader.current
-        note = answer(self.node, 'LoadWorld', response.result, self.node.holding_time(load))
+        note = standard_answer(self.node, 'LoadWorld', response.result,
+                               self.node.holding_time(load), LOAD_WORLD_CODES)
         if note:
             response.result.error_message = note
         elif response.result.result != Result.RESULT_OK:
@@ -102,52 +89,19 @@ class WorldServices:
 
     def _read(self, uri, resource_string):
         """Return the LoadedWorld a request names, read but not yet tried."""
-        try:
-            if uri:
-                return self._read_file(uri)
-            if not resource_string:
-                raise Refusal(LoadWorld.Response.NO_RESOURCE,
-                              'neither uri nor resource_string is given')
-            return self._read_text(resource_string)
-        except WorldFileError as error:
-            raise Refusal(CODES[error.kind], str(error)) from None
-
-    def _read_file(self, uri):
-        try:
-            path = confined_path(uri, self.package_share)
-        except PackageFileError as error:
-            raise WorldFileError(NO_RESOURCE, str(error)) from None
-        root_tag = _root_tag(path, quoted(uri))
-        if root_tag in SCENERY_ROOTS:
-            name = os.path.splitext(os.path.basename(path))[0]
-            world = WorldFile(name=name, description=f'the scenery {quoted(uri)} alone',
-                              tags=(), scenery=path, models=())
-        else:
-            _check_format(root_tag, quoted(uri))
-            world = read_world_file(path, self.package_share, shown=uri)
-        return LoadedWorld(world, uri)
-
-    def _read_text(self, text):
-        what = 'resource_string'
-        root_tag = _root_tag(None, what, text=text)
-        if root_tag in SCENERY_ROOTS:
-            world = WorldFile(name='scenery', description='a scenery given as text', tags=(),
-                              scenery='', models=())
-            return LoadedWorld(world, '', resource_string=text, scenery_text=text)
-        _check_format(root_tag, what)
-        return LoadedWorld(parse_world(text, what, None, self.package_share), '',
-                           resource_string=text)
-
-    def _prepared(self, loaded):
-        """Read and try a world's scenery and models, mapping the refusals to codes."""
-        try:
-            return self.loader.prepare(loaded)
-        except SceneryError as error:
-            code = LoadWorld.Response.UNSUPPORTED_ASSETS if error.unsupported else \
-                LoadWorld.Response.RESOURCE_PARSE_ERROR
-            raise Refusal(code, str(error)) from None
-        except WorldFileError as error:
-            raise Refusal(CODES[error.kind], str(error)) from None
+        if uri:
+            try:
+                path = confined_path(uri, self.package_share)
+            except PackageFileError as error:
+                raise WorldError(str(error), Reason.NO_RESOURCE) from None
+            return LoadedWorld(read_world_file(path, self.package_share, shown=uri,
+                                               scenery_alone=True), uri)
+        if not resource_string:
+            raise Refusal(LoadWorld.Response.NO_RESOURCE,
+                          'neither uri nor resource_string is given')
+        return LoadedWorld(parse_world(resource_string, 'resource_string', None,
+                                       self.package_share, scenery_alone=True),
+                           '', resource_string=resource_string)
 
     def unload_world_callback(self, request, response):
         """Remove every entity and the world: the no-world state, where nothing steps."""
@@ -159,7 +113,7 @@ class WorldServices:
             self.simulation.stopped = False
             self.node.after_reset()
             self.node.get_logger().info(f'UnloadWorld: unloaded {quoted(name)}')
-        answer(self.node, 'UnloadWorld', response.result, self.node.holding_time(unload))
+        standard_answer(self.node, 'UnloadWorld', response.result, self.node.holding_time(unload))
         return response
 
     def get_current_world_callback(self, request, response):
@@ -168,7 +122,7 @@ class WorldServices:
             if self.loader.current is None:
                 raise Refusal(GetCurrentWorld.Response.NO_WORLD_LOADED, 'no world is loaded')
             fill_world(response.world, self.loader.current)
-        answer(self.node, 'GetCurrentWorld', response.result, current)
+        standard_answer(self.node, 'GetCurrentWorld', response.result, current)
         return response
 
     def get_available_worlds_callback(self, request, response):
@@ -191,22 +145,15 @@ class WorldServices:
             if extra_failures and not request.continue_on_error:
                 raise Refusal(Result.RESULT_OPERATION_FAILED, message)
             return message
-        message = answer(self.node, 'GetAvailableWorlds', response.result, available)
+        message = standard_answer(self.node, 'GetAvailableWorlds', response.result, available)
         if message:
             response.result.error_message = message
         return response
 
     def _default_folders(self):
         """Return (folder, failure) of the worlds/ folder of every installed package."""
-        folders = []
-        for package in sorted(get_packages_with_prefixes()):
-            try:
-                folder = os.path.join(self.package_share(package), WORLDS_FOLDER)
-            except Exception:  # noqa: B902 a package the index names but cannot place
-                continue
-            if os.path.isdir(folder):
-                folders.append((folder, None))
-        return folders
+        folders = [os.path.join(share, WORLDS_FOLDER) for share in installed_shares().values()]
+        return [(folder, None) for folder in folders if os.path.isdir(folder)]
 
     def _source_folders(self, sources):
         folders = []
@@ -252,31 +199,3 @@ def fill_world(message, loaded):
     message.world_resource = Resource(uri=loaded.uri, resource_string=loaded.resource_string)
     message.description = world.description
     message.tags = list(world.tags)
-
-
-def _root_tag(path, what, *, text=None):
-    """Return the root element's name of a world or scenery file (or text), or refuse it."""
-    try:
-        if text is None:
-            with open(path, 'rb') as world_file:
-                data = world_file.read(MAX_MODEL_XML_BYTES + 1)
-        else:
-            data = text.encode('utf-8')
-        if len(data) > MAX_MODEL_XML_BYTES:
-            raise WorldFileError(PARSE_ERROR, f'{what} is larger than {MAX_MODEL_XML_BYTES} '
-                                 'bytes')
-        root = parse_xml(data, what)
-    except OSError as error:
-        raise WorldFileError(NO_RESOURCE, f'{what} cannot be read: {error.strerror}') from None
-    except ValueError as error:  # the parser's UrdfError
-        raise WorldFileError(PARSE_ERROR, str(error)) from None
-    return root.tag if isinstance(root.tag, str) else ''
-
-
-def _check_format(tag, what):
-    if tag in OTHER_FORMATS:
-        raise WorldFileError(UNSUPPORTED_FORMAT, f'{what} is {OTHER_FORMATS[tag]} (root element '
-                             f'<{tag}>); this world loads world files (<world>), URDF and MJCF')
-    if tag != 'world':
-        raise WorldFileError(UNSUPPORTED_FORMAT, f'{what} is no world file: its root element is '
-                             f'<{tag[:40]}>, not <world>')

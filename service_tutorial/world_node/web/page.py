@@ -12,6 +12,7 @@ like any other.
 import collections
 import time
 
+from service_tutorial.sim.robot_files import read_path
 from service_tutorial.world_node.web.page_client import PageClient
 from service_tutorial.world_node.web.panel import Panel
 from service_tutorial.world_node.web.scene_view import SceneView
@@ -41,9 +42,8 @@ class WebPage:
         self.scene = SceneView(self.server, self.world, parameters['camera_position'],
                                parameters['camera_look_at'], parameters['camera_fovy'])
         self.client = PageClient(node)
-        with open(resolve_model_path('r2d2.urdf')) as urdf_file:
-            r2d2_urdf = urdf_file.read()
-        self.panel = Panel(self.server.gui, self.client, r2d2_urdf)
+        r2d2 = read_path(resolve_model_path('r2d2.urdf'), formats=('urdf',))
+        self.panel = Panel(self.server.gui, self.client, r2d2.text)
         self.sensors = SensorView(self.server, self.panel, self.client, node)
         shown_host = '127.0.0.1' if host in ('', '0.0.0.0') else host
         self.address = f'http://{shown_host}:{self.server.get_port()}'
