@@ -9,7 +9,6 @@ from dataclasses import dataclass
 
 import mujoco
 import numpy as np
-from service_tutorial.sim import validation
 from service_tutorial.sim.validation import quoted
 from service_tutorial.sim.validation import Reason
 from service_tutorial.sim.validation import SCOPE_SEPARATOR
@@ -158,19 +157,3 @@ def frame_body(reference_frame, models, mj_model):
             return body_id
     raise WorldError(f'unknown reference frame {quoted(reference_frame)}',
                      Reason.UNKNOWN_FRAME)
-
-
-def checked_state(model_name, anchored, *, position, orientation, linear_velocity,
-                  angular_velocity):
-    """Return the ModelState asked for a model, or refuse the value it cannot have."""
-    state = ModelState(
-        position=validation.position(position),
-        orientation=validation.unit_quaternion(orientation),
-        linear_velocity=validation.vector(linear_velocity, 3, 'linear_velocity'),
-        angular_velocity=validation.vector(angular_velocity, 3, 'angular_velocity'))
-    validation.check_velocity(state.linear_velocity, 'linear_velocity', model_name)
-    validation.check_velocity(state.angular_velocity, 'angular_velocity', model_name)
-    if anchored and (np.any(state.linear_velocity) or np.any(state.angular_velocity)):
-        raise WorldError(f"model '{model_name}' is anchored to the world; it cannot be given "
-                         'a velocity')
-    return state

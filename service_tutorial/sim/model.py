@@ -6,7 +6,9 @@ import mujoco
 import numpy as np
 from service_tutorial.sim import frames
 from service_tutorial.sim import plugins
+from service_tutorial.sim import validation
 from service_tutorial.sim.validation import SCOPE_SEPARATOR
+from service_tutorial.sim.validation import WorldError
 
 # What a model's integration state is made of, in MjData, carried over when the spec is rebuilt.
 STATE_FIELDS = ('qpos', 'qvel', 'qacc_warmstart', 'qfrc_applied', 'act', 'ctrl')
@@ -78,6 +80,20 @@ class Model:
     def anchored(self):
         """Return True if the model is fixed to the world rather than free to move."""
         return self.free_qpos_adr is None
+
+    def checked_state(self, *, position, orientation, linear_velocity, angular_velocity):
+        """Return the ModelState asked for this model, or refuse a value it cannot have."""
+        state = frames.ModelState(
+            position=validation.position(position),
+            orientation=validation.unit_quaternion(orientation),
+            linear_velocity=validation.vector(linear_velocity, 3, 'linear_velocity'),
+            angular_velocity=validation.vector(angular_velocity, 3, 'angular_velocity'))
+        validation.check_velocity(state.linear_velocity, 'linear_velocity', self.name)
+        validation.check_velocity(state.angular_velocity, 'angular_velocity', self.name)
+        if self.anchored and (np.any(state.linear_velocity) or np.any(state.angular_velocity)):
+            raise WorldError(f"model '{self.name}' is anchored to the world; it cannot be "
+                             'given a velocity')
+        return state
 
     def mark_placed(self):
         """Note that the model was just put somewhere on purpose, not by a recovery."""

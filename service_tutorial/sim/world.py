@@ -370,9 +370,9 @@ class World:
                         angular_velocity=(0.0, 0.0, 0.0), reference_frame=''):
         """Move a model's base link to a pose and twist given in reference_frame."""
         model = self._spawned(name)
-        relative = frames.checked_state(
-            name, model.anchored, position=position, orientation=orientation,
-            linear_velocity=linear_velocity, angular_velocity=angular_velocity)
+        relative = model.checked_state(
+            position=position, orientation=orientation, linear_velocity=linear_velocity,
+            angular_velocity=angular_velocity)
         model.place(self._model, self._data,
                     frames.in_world(self._frame_state(reference_frame), relative))
         model.mark_placed()
