@@ -4,9 +4,10 @@ import copy
 import math
 import time
 
-from fleet import model_path, spawn_file
+from fleet import model_path
 import mujoco
 from report import median_ms, Table
+from service_tutorial.testing.spawns import spawn_file
 
 
 def core_table(config):

@@ -6,6 +6,7 @@ import time
 from harness import BenchmarkError, NodeProcess, sim_time_sample, wait_for_world
 from harness import wait_until, wait_until_gone
 import mujoco
+from service_tutorial.testing.spawns import spawn_file
 
 PACKAGE = 'service_tutorial'
 # Fleet layout: ten robots to a row, far enough apart that their circles never touch.
@@ -25,22 +26,6 @@ def read_model(name):
     """Return the URDF text of one of the package's models."""
     with open(model_path(name)) as model_file:
         return model_file.read()
-
-
-def spawn_robot(world, name, text, **placement):
-    """Spawn one robot from its URDF text into a ROS-free World; return its Model or raise."""
-    from service_tutorial.sim.spawning import SpawnOrder
-    outcome, = world.spawn([SpawnOrder(name, text, **placement)])
-    if isinstance(outcome, Exception):
-        raise outcome
-    return outcome
-
-
-def spawn_file(world, name, path, **placement):
-    """Spawn one robot from a URDF file into a ROS-free World, meshes by its folder."""
-    with open(path) as robot_file:
-        text = robot_file.read()
-    return spawn_robot(world, name, text, base_dir=os.path.dirname(path), **placement)
 
 
 def fleet_names(count):

@@ -3,9 +3,10 @@
 import math
 import time
 
-from fleet import core_fleet, fleet_parameters, read_model, spawn_robot
+from fleet import core_fleet, fleet_parameters, read_model
 from harness import ExecutorThread, quiet_console
 from report import percentiles, Table
+from service_tutorial.testing.spawns import spawn_robot
 
 # R2-D2 where the lesson spawns it: (-2, 1, 1), turned -90 degrees about z.
 LESSON_POSITION = (-2.0, 1.0, 1.0)

@@ -4,11 +4,12 @@ import os
 import statistics
 import time
 
-from fleet import FleetWorld, model_path, read_model, spawn_robot
+from fleet import FleetWorld, model_path, read_model
 from harness import wait_for_count
 import mujoco
 import numpy as np
 from report import median_ms, Table
+from service_tutorial.testing.spawns import spawn_robot
 
 
 def cpu_time_per_call(function, repeats):

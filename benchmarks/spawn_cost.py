@@ -11,10 +11,11 @@ present. The spawn_cost section of world_benchmark.py.
 import os
 import time
 
-from fleet import core_fleet, fleet_position, model_path, read_model, spawn_robot
+from fleet import core_fleet, fleet_position, model_path, read_model
 import mujoco
 import numpy as np
 from report import Table
+from service_tutorial.testing.spawns import spawn_robot
 
 SPAWN_POSITION = (-2.0, 1.0, 1.0)
 # A description the world has not seen: the same robot, its text made new by a comment.

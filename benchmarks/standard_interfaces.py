@@ -13,13 +13,14 @@ import ctypes
 import time
 
 from fleet import core_fleet, DRIVE_ANGULAR_Z, Fleet, fleet_names, fleet_parameters
-from fleet import fleet_position, RawFleet, read_model, spawn_robot
+from fleet import fleet_position, RawFleet, read_model
 from harness import BenchmarkError, ExecutorThread, prompt_thread_switches, quiet_console
 from harness import THREAD_SWITCH_INTERVAL, wait_until
 import mujoco
 from rcl_client import RclClient, Sequence, String
 from report import median_ms, Table
 from round_trips import TrivialService
+from service_tutorial.testing.spawns import spawn_robot
 from spawn_cost import BareWorld
 
 # SpawnEntities of a batch: at most this many times MuJoCo's own path for the same batch, plus

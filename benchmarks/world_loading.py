@@ -12,9 +12,9 @@ trivial Trigger on the world's executor.
 import os
 import time
 
-from fleet import spawn_robot
 from harness import BenchmarkError, prompt_thread_switches, quiet_console
 from report import median_ms, Table
+from service_tutorial.testing.spawns import spawn_robot
 from standard_interfaces import StandardWorld, TRIGGERS_ALLOWED
 
 # A load reads the world, tries its models in a trial world, then builds it: at most this many

@@ -14,7 +14,7 @@ from service_tutorial.pictures.trajectory_plot import write_trajectory_plot
 from service_tutorial.sim import frames
 from service_tutorial.sim.rendering import SceneCamera
 from service_tutorial.sim.world import World
-from spawns import spawn_file
+from service_tutorial.testing.spawns import spawn_file
 
 
 # --- PNG ------------------------------------------------------------------------------------

@@ -7,7 +7,7 @@ import time
 from repository import model_path, TEST_MODELS
 from service_tutorial.sim.plugins.camera_sensor import CameraSensor
 from service_tutorial.sim.world import World
-from spawns import spawn_file, spawn_robot
+from service_tutorial.testing.spawns import spawn_file, spawn_robot
 
 CAMERA_ROBOT = model_path('sensor_camera', TEST_MODELS)  # 160x120 at 10 Hz
 RED_BOX = model_path('props/red_box', TEST_MODELS)

@@ -7,7 +7,7 @@ from service_tutorial.sim.model import Model
 from service_tutorial.sim.spawning import SpawnOrder
 from service_tutorial.sim.validation import DescriptionError, WorldError
 from service_tutorial.sim.world import World
-from spawns import spawn_file, spawn_robot
+from service_tutorial.testing.spawns import spawn_file, spawn_robot
 
 
 def tinybot_orders(count, *, spacing=0.5):

@@ -9,7 +9,7 @@ from service_tutorial.sim import bounds
 from service_tutorial.sim.bounds import OrientedBoxes
 from service_tutorial.sim.urdf.builder import load_urdf
 from service_tutorial.sim.world import World
-from spawns import spawn_file, spawn_robot
+from service_tutorial.testing.spawns import spawn_file, spawn_robot
 
 
 def one_box(centre, rotation, half_sizes):

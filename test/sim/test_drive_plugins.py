@@ -16,7 +16,7 @@ from service_tutorial.sim.plugins.skid_steer import SkidSteer
 from service_tutorial.sim.urdf.builder import load_urdf
 from service_tutorial.sim.validation import WorldError
 from service_tutorial.sim.world import World
-from spawns import spawn_robot
+from service_tutorial.testing.spawns import spawn_robot
 from worlds import drive_and_stop, settled_world
 
 DIFF_DRIVES = ('diffbot_ros1', 'diffbot_ros2', 'pairbot_ros2')

@@ -10,7 +10,7 @@ from service_tutorial.sim.description import UrdfError
 from service_tutorial.sim.urdf import builder
 from service_tutorial.sim.urdf.builder import load_urdf
 from service_tutorial.sim.world import World
-from spawns import spawn_file, spawn_robot
+from service_tutorial.testing.spawns import spawn_file, spawn_robot
 
 LINKBOT = model_path('linkbot', TEST_MODELS)
 LINKBOT_MASS = 2.0 + 0.2 + 0.01 + 0.05

@@ -12,7 +12,7 @@ from repository import model_path, TEST_MODELS
 from service_tutorial.sim.urdf import builder
 from service_tutorial.sim.urdf.builder import load_urdf
 from service_tutorial.sim.world import World
-from spawns import spawn_file, spawn_robot
+from service_tutorial.testing.spawns import spawn_file, spawn_robot
 
 MESHES = os.path.join(TEST_MODELS, 'meshes')
 HALF_BOX = np.array([0.05, 0.03, 0.02])  # every box mesh file is 0.1 x 0.06 x 0.04 m
@@ -201,9 +201,8 @@ def test_pycollada_is_imported_only_for_a_collada_mesh():
     stl_robot = mesh_robot(('meshes/box_binary.stl', None))
     program = (
         'import sys\n'
-        f'sys.path.insert(0, {os.path.dirname(os.path.dirname(__file__))!r})\n'
         'from service_tutorial.sim.world import World\n'
-        'from spawns import spawn_file, spawn_robot\n'
+        'from service_tutorial.testing.spawns import spawn_file, spawn_robot\n'
         'world = World()\n'
         f'spawn_file(world, "diffbot", {model_path("diffbot_ros2", TEST_MODELS)!r})\n'
         f'spawn_robot(world, "stl", {stl_robot!r}, base_dir={TEST_MODELS!r})\n'

@@ -13,7 +13,7 @@ from service_tutorial.sim.plugins.joint_state_publisher import JointStatePublish
 from service_tutorial.sim.spawning import SpawnOrder
 from service_tutorial.sim.validation import AssetError, DescriptionError, Reason
 from service_tutorial.sim.world import World
-from spawns import spawn_file, spawn_robot
+from service_tutorial.testing.spawns import spawn_file, spawn_robot
 from test_spawn_and_delete import contents
 
 CRATE = read_file(MJCF_CRATE)

@@ -13,7 +13,7 @@ from service_tutorial.sim.urdf.gazebo import read_plugin_blocks
 from service_tutorial.sim.urdf.hardened_xml import parse_model_xml
 from service_tutorial.sim.validation import WorldError
 from service_tutorial.sim.world import World
-from spawns import spawn_file, spawn_robot
+from service_tutorial.testing.spawns import spawn_file, spawn_robot
 
 
 class TickPlugin(Plugin):

@@ -15,7 +15,7 @@ import numpy as np
 from repository import TINYBOT
 from service_tutorial.sim.plugins.diff_drive import MAX_WHEEL_RIM_SPEED
 from service_tutorial.sim.validation import bounded, WorldError
-from spawns import spawn_robot
+from service_tutorial.testing.spawns import spawn_robot
 from worlds import settled_world
 
 PROPERTY_SETTINGS = settings(max_examples=60, derandomize=True, database=None, deadline=None,

@@ -9,7 +9,7 @@ import pytest
 from repository import R2D2, ROOT, TINYBOT
 from service_tutorial.sim.rendering import SceneCamera
 from service_tutorial.sim.world import World
-from spawns import spawn_file
+from service_tutorial.testing.spawns import spawn_file
 import yaml
 
 R2D2_SPAWN = (-2.0, 1.0, 1.0)

@@ -14,7 +14,7 @@ import pytest
 from repository import MODELS, TEST_MODELS, TINYBOT
 from service_tutorial.sim.urdf.builder import load_urdf
 from service_tutorial.sim.world import World
-from spawns import spawn_file
+from service_tutorial.testing.spawns import spawn_file
 
 SCENERY_FILES = ('yard.urdf',)
 LESSON_FILES = sorted(path for path in glob.glob(os.path.join(MODELS, '*.urdf'))

@@ -8,7 +8,7 @@ from repository import model_path, R2D2, TEST_MODELS, TINYBOT
 from service_tutorial.sim.plugins.ray_sensor import RaySensor
 from service_tutorial.sim.validation import WorldError
 from service_tutorial.sim.world import World
-from spawns import spawn_file
+from service_tutorial.testing.spawns import spawn_file
 
 YARD = model_path('yard')
 LASER_ROBOT = model_path('sensor_laser', TEST_MODELS)

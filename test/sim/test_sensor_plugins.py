@@ -13,7 +13,7 @@ from service_tutorial.sim.plugins.ray_sensor import RaySensor
 from service_tutorial.sim.urdf.builder import load_urdf
 from service_tutorial.sim.validation import WorldError
 from service_tutorial.sim.world import World
-from spawns import spawn_file, spawn_robot
+from service_tutorial.testing.spawns import spawn_file, spawn_robot
 
 LASER_ROBOT = model_path('sensor_laser', TEST_MODELS)
 WALL = model_path('props/wall', TEST_MODELS)

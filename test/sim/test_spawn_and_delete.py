@@ -11,7 +11,7 @@ from service_tutorial.sim.description_cache import DescriptionCache
 from service_tutorial.sim.spawning import SpawnOrder
 from service_tutorial.sim.validation import DescriptionError, WorldError
 from service_tutorial.sim.world import World
-from spawns import spawn_file, spawn_robot
+from service_tutorial.testing.spawns import spawn_file, spawn_robot
 
 MESHBOT = model_path('meshbot', TEST_MODELS)
 MISSINGBOT = model_path('missingbot', TEST_MODELS)

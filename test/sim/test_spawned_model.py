@@ -5,7 +5,7 @@ import pytest
 from repository import R2D2, TINYBOT
 from service_tutorial.sim.plugins.diff_drive import DiffDrive
 from service_tutorial.sim.world import World
-from spawns import spawn_file
+from service_tutorial.testing.spawns import spawn_file
 
 
 def assert_bound(world, model):

@@ -17,7 +17,7 @@ from service_tutorial.sim.urdf import hardened_xml
 from service_tutorial.sim.urdf.builder import load_urdf
 from service_tutorial.sim.validation import WorldError
 from service_tutorial.sim.world import World
-from spawns import spawn_robot
+from service_tutorial.testing.spawns import spawn_robot
 
 INERTIAL = ('<inertial><mass value="{mass}"/><inertia ixx="0.01" iyy="0.01" izz="0.01" '
             'ixy="0" ixz="0" iyz="0"/></inertial>')

@@ -9,7 +9,7 @@ from repository import model_path, TEST_MODELS
 from service_tutorial.sim import frames
 from service_tutorial.sim.visual_shapes import shape_poses, visual_shapes
 from service_tutorial.sim.world import World
-from spawns import spawn_file, spawn_robot
+from service_tutorial.testing.spawns import spawn_file, spawn_robot
 
 TINYBOT_BLUE = (0.16, 0.38, 0.74, 1.0)
 

@@ -13,7 +13,7 @@ from service_tutorial.sim import frames
 from service_tutorial.sim.plugins.diff_drive import MAX_WHEEL_RIM_SPEED
 from service_tutorial.sim.validation import WorldError
 from service_tutorial.sim.world import World
-from spawns import spawn_file, spawn_robot
+from service_tutorial.testing.spawns import spawn_file, spawn_robot
 from worlds import drive_and_stop, heading, settled_world
 
 FACING_MINUS_Y = (0.707, 0.0, 0.0, -0.707)

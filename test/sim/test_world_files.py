@@ -10,7 +10,7 @@ from service_tutorial.sim.scenery import Scenery, SceneryError
 from service_tutorial.sim.validation import Reason
 from service_tutorial.sim.world import World
 from service_tutorial.sim.world_files import parse_world, read_world_file, WorldFileError
-from spawns import spawn_robot
+from service_tutorial.testing.spawns import spawn_robot
 
 PARSE, MISSING, FORMAT = Reason.NOT_PARSEABLE, Reason.NO_RESOURCE, Reason.UNSUPPORTED_FORMAT
 

@@ -4,7 +4,7 @@ import math
 
 import numpy as np
 from service_tutorial.sim.world import World
-from spawns import spawn_file
+from service_tutorial.testing.spawns import spawn_file
 
 
 def settled_world(name, path, *, steps=250, **world_options):

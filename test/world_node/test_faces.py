@@ -2,9 +2,9 @@
 
 from repository import model_path, TEST_MODELS, TINYBOT
 from service_tutorial.sim.world import World
+from service_tutorial.testing.spawns import spawn_file
 from service_tutorial.world_node.faces import FACES
 from service_tutorial.world_node.faces.face import PluginFace
-from spawns import spawn_file
 
 
 def test_every_face_declares_the_protocol_and_fills_in_what_it_does():

@@ -4,10 +4,10 @@ from geometry_msgs.msg import Twist, Vector3
 import pytest
 from service_tutorial.conversions import seconds_of
 from service_tutorial.sim.world import World
+from service_tutorial.testing.spawns import spawn_robot
 from service_tutorial.world_node.standard.entity_messages import EntityStates
 from simulation_interfaces.msg import EntityState, Result
 from simulation_interfaces.srv import SetEntityState
-from spawns import spawn_robot
 from standard_entities import close, CRATE, entity_state, red_box, snapshot, spawn_or_fail
 from standard_entities import stamped
 

@@ -17,11 +17,11 @@ import pytest
 from repository import read_file, TINYBOT
 from service_tutorial.conversions import make_pose, seconds_of
 from service_tutorial.sim.world import World
+from service_tutorial.testing.spawns import spawn_file
 from simulation_interfaces.action import SimulateSteps
 from simulation_interfaces.msg import Result, SimulationState, SimulatorFeatures
 from simulation_interfaces.srv import GetSimulationState, GetSimulatorFeatures
 from simulation_interfaces.srv import ResetSimulation, SetSimulationState, StepSimulation
-from spawns import spawn_file
 
 pytestmark = pytest.mark.ros
 

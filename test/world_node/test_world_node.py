@@ -11,7 +11,7 @@ from sensor_msgs.msg import JointState
 from service_tutorial.conversions import make_pose, seconds_of as seconds, yaw_of
 from service_tutorial.sim.spawning import SpawnOrder
 from service_tutorial.sim.world import World
-from spawns import spawn_robot
+from service_tutorial.testing.spawns import spawn_robot
 from srv_interfaces.srv import SetModelState
 
 pytestmark = pytest.mark.ros

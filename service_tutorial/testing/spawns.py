@@ -1,4 +1,4 @@
-"""Spawning into a ROS-free World the way the tests do it most: one robot, refused by raising."""
+"""Spawning one robot into a ROS-free World, as tests and benchmarks do: a refusal raises."""
 
 from service_tutorial.sim.robot_files import read_path
 from service_tutorial.sim.spawning import SpawnOrder
