@@ -14,8 +14,8 @@ may come from too (package_files.py); other files are refused unopened. Every re
 WorldError with its Reason: NO_RESOURCE, UNSUPPORTED_FORMAT or NOT_PARSEABLE.
 """
 
+import collections
 from dataclasses import dataclass
-import functools
 import os
 
 from service_tutorial.sim.description import UrdfError
@@ -33,8 +33,11 @@ OTHER_EXTENSIONS = {'.sdf': 'SDF', '.world': 'SDF', '.usd': 'USD', '.usda': 'USD
                     '.usdc': 'USD', '.usdz': 'USD'}
 OTHER_ROOTS = {'sdf': 'SDF'}
 _XACRO_TAG = '{' + XACRO_NAMESPACE + '}'
-# Texts told apart lately, kept: a fleet's or a lesson's robot is the same text again and again.
+# Texts told apart lately, kept: a fleet's or a lesson's robot is the same text again and
+# again. Only texts up to a size are kept, so that the kept ones never weigh much.
 _TOLD_TEXTS = 32
+_TOLD_TEXT_CHARACTERS = 1 << 18
+_told_texts = collections.OrderedDict()  # (text, base_dir, what, formats, from_file) -> source
 
 
 @dataclass(frozen=True)
@@ -81,7 +84,7 @@ def read_text(text, what='resource_string', *, formats=ALL_FORMATS):
             text = text.decode('utf-8')
         except UnicodeDecodeError:
             raise WorldError(f'{what} is not UTF-8 text', Reason.NOT_PARSEABLE) from None
-    return _told(text, None, what, tuple(formats), False)
+    return _told_or_kept(text, None, what, tuple(formats), False)
 
 
 def is_xacro(path, text):
@@ -165,10 +168,20 @@ def _read_file(path, shown, xacro_arguments, formats):
         text = expand_xacro(path, xacro_arguments)
     elif xacro_arguments:
         raise WorldError(f'xacro arguments given for {shown}, which is not a xacro file')
-    return _told(text, os.path.dirname(path), shown, tuple(formats), True)
+    return _told_or_kept(text, os.path.dirname(path), shown, tuple(formats), True)
 
 
-@functools.lru_cache(maxsize=_TOLD_TEXTS)
+def _told_or_kept(*key):
+    """Return _told(*key), kept from an earlier call when the text is small."""
+    if len(key[0]) > _TOLD_TEXT_CHARACTERS:
+        return _told(*key)
+    source = _told_texts.pop(key, None) or _told(*key)
+    _told_texts[key] = source  # the latest last
+    while len(_told_texts) > _TOLD_TEXTS:
+        _told_texts.popitem(last=False)
+    return source
+
+
 def _told(text, base_dir, what, formats, from_file):
     """Return the RobotSource of a text of one of the formats, or refuse it."""
     data = text.encode('utf-8')
