@@ -86,11 +86,17 @@ def robot_description(order):
 class MujocoWorld(Node):
     """Serves a MuJoCo world the way gazebo_ros serves Gazebo's."""
 
-    def __init__(self, *, sensor_participant=True, **kwargs):
-        """Start the world; sensor_participant: sensor topics in a participant of their own."""
+    def __init__(self, *, sensor_participant=True, web_panel=None, **kwargs):
+        """
+        Start the world; sensor_participant: sensor topics in a participant of their own.
+
+        web_panel: the panel its web page shows (web:=true), a subclass of web.panel.Panel
+        that adds its controls (lesson_world.py hands it the lesson's); None: the page's own.
+        """
         super().__init__('mujoco', **kwargs)
         self.parameters = parameters = declare_world_parameters(self)  # ParameterError if bad
         self.forwarded_logs = forward_core_logs(self)
+        self._web_panel = web_panel
         try:
             self._start(parameters, sensor_participant)
         except BaseException:
@@ -115,7 +121,7 @@ class MujocoWorld(Node):
         from service_tutorial.world_node.standard.named_poses import NamedPoseServices
         from service_tutorial.world_node.standard.spawnables import SpawnableServices
         from service_tutorial.world_node.standard.worlds import WorldServices
-        from service_tutorial.world_node.world_loader import resolve_model_path, WorldLoader
+        from service_tutorial.world_node.world_loader import WorldLoader
         self.world_loader = WorldLoader(self, get_package_share_directory)
         start_up = self.world_loader.start_up_world(parameters, default_parameters())
         self.world = World(timestep=parameters['timestep'],
@@ -168,7 +174,7 @@ class MujocoWorld(Node):
         if parameters['web']:
             from service_tutorial.world_node.web.page import WebPage
             self.web_page = WebPage(self, parameters['web_host'], parameters['web_port'],
-                                    resolve_model_path)
+                                    self._web_panel)
             self.get_logger().info(f'web page: {self.web_page.address}')
 
         # Every parameter that is not read-only takes effect when it is set.
@@ -397,13 +403,13 @@ class MujocoWorld(Node):
         return super().destroy_node()
 
 
-def main(args=None):
+def main(args=None, *, web_panel=None):
     """
     Run the MuJoCo world until Ctrl-C or a client asks it to quit, then end with status 0.
 
-    A bad parameter ends it with one line, status 2.
+    A bad parameter ends it with one line, status 2. web_panel: as MujocoWorld's.
     """
-    return run_node(lambda: run_or_exit('mujoco_world', MujocoWorld),
+    return run_node(lambda: run_or_exit('mujoco_world', MujocoWorld, web_panel=web_panel),
                     lambda world: rclpy.spin_until_future_complete(world, world.quitting),
                     args=args, interrupted_status=None)
 
