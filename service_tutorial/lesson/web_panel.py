@@ -7,8 +7,7 @@ with the lesson's controls, as a Gazebo plugin extends Gazebo's plugin classes. 
 goes through the page's ROS client (LessonPageClient: the page's PageClient with the lesson's
 calls), so the page asks the world exactly what a ROS client would and shows the answer,
 numbered, under "Answer". The turn's fields are read as robot_turning_client reads what is
-typed, with its limits and its refusals (service_tutorial.turning_input), before anything is
-sent.
+typed, with its limits and its refusals (turning_input.py), before anything is sent.
 """
 
 import threading
@@ -16,7 +15,7 @@ import threading
 from geometry_msgs.msg import Twist
 from service_tutorial.conversions import make_pose
 from service_tutorial.lesson.model_services import model_path
-from service_tutorial.turning_input import parse_turning_request, TurningInputError
+from service_tutorial.lesson.turning_input import parse_turning_request, TurningInputError
 from service_tutorial.world_node.web.page_client import PageClient
 from service_tutorial.world_node.web.panel import Panel
 from srv_interfaces.srv import ControlTurningMessage, DeleteModel, SpawnModel
