@@ -5,7 +5,8 @@ import time
 from geometry_msgs.msg import Pose, Twist
 from rclpy.parameter import Parameter
 from rosgraph_msgs.msg import Clock
-from service_tutorial.conversions import make_pose, seconds_of
+from service_tutorial.conversions import seconds_of
+from service_tutorial.lesson.r2d2 import spawn_pose
 from service_tutorial.lesson_world import lesson_world
 from srv_interfaces.srv import DeleteModel, GetModelList, GetModelState, SetModelState
 from srv_interfaces.srv import SpawnModel
@@ -14,7 +15,7 @@ from std_srvs.srv import Empty
 
 def lesson_pose():
     """Return R2-D2's pose in the lesson: (-2, 1, 1), turned -90 degrees about z."""
-    return make_pose(-2.0, 1.0, 1.0, quaternion=(0.0, 0.0, -0.707, 0.707))
+    return spawn_pose()
 
 
 class RunningWorld:

@@ -13,18 +13,14 @@ typed, with its limits and its refusals (turning_input.py), before anything is s
 import threading
 
 from geometry_msgs.msg import Twist
-from service_tutorial.conversions import make_pose
 from service_tutorial.lesson.model_services import model_path
+from service_tutorial.lesson.r2d2 import R2D2_FILE, R2D2_NAME, spawn_pose
 from service_tutorial.lesson.turning_input import parse_turning_request, TurningInputError
 from service_tutorial.world_node.web.page_client import PageClient
 from service_tutorial.world_node.web.panel import Panel
 from srv_interfaces.srv import ControlTurningMessage, DeleteModel, SpawnModel
 from std_srvs.srv import Empty
 
-# The lesson's R2-D2: where its spawn_model_client puts it, turned -90 degrees about z.
-R2D2_NAME = 'r2d2'
-R2D2_POSITION = (-2.0, 1.0, 1.0)
-R2D2_QUATERNION = (0.0, 0.0, -0.707, 0.707)  # x, y, z, w
 # Drive buttons: label, linear (m/s) and angular (rad/s) velocity, as a teleop's keys give.
 DRIVE_BUTTONS = (('Forward', 0.2, 0.0), ('Left', 0.0, 0.5), ('Stop', 0.0, 0.0),
                  ('Right', 0.0, -0.5), ('Back', -0.2, 0.0))
@@ -63,8 +59,8 @@ class LessonPageClient(PageClient):
 
     def spawn_r2d2(self, urdf, answered):
         """Ask the world to spawn R2-D2 where the lesson does."""
-        request = SpawnModel.Request(model_name=R2D2_NAME, model_xml=urdf)
-        request.initial_pose = make_pose(*R2D2_POSITION, quaternion=R2D2_QUATERNION)
+        request = SpawnModel.Request(model_name=R2D2_NAME, model_xml=urdf,
+                                     initial_pose=spawn_pose())
         return self.call('spawn', request, answered)
 
     def delete_r2d2(self, answered):
@@ -107,7 +103,7 @@ class LessonPanel(Panel):
 
     def __init__(self, gui, client):
         """Lay out the page's panel with the lesson's controls; spawn sends R2-D2's URDF."""
-        with open(model_path('r2d2.urdf')) as urdf_file:
+        with open(model_path(R2D2_FILE)) as urdf_file:
             self.r2d2_urdf = urdf_file.read()
         self._answer_lock = threading.Lock()
         self.answers = 0  # answers shown so far
