@@ -86,9 +86,9 @@ def robot_description(order):
 class MujocoWorld(Node):
     """Serves a MuJoCo world the way gazebo_ros serves Gazebo's."""
 
-    def __init__(self, *, sensor_participant=True, web_panel=None, **kwargs):
+    def __init__(self, *, web_panel=None, **kwargs):
         """
-        Start the world; sensor_participant: sensor topics in a participant of their own.
+        Start the world.
 
         web_panel: the panel its web page shows (web:=true), a subclass of web.panel.Panel
         that adds its controls (lesson_world.py hands it the lesson's); None: the page's own.
@@ -98,7 +98,7 @@ class MujocoWorld(Node):
         self.forwarded_logs = forward_core_logs(self)
         self._web_panel = web_panel
         try:
-            self._start(parameters, sensor_participant)
+            self._start(parameters)
         except BaseException:
             self.forwarded_logs.stop()
             raise
@@ -112,7 +112,7 @@ class MujocoWorld(Node):
         return super().create_service(srv_type, srv_name, heard_by_pacer(self, callback),
                                       **kwargs)
 
-    def _start(self, parameters, sensor_participant):
+    def _start(self, parameters):
         """Make the world, its services and topics, and the start-up models."""
         # Imported here, after the parameters passed their checks: a bad one ends the program
         # before the simulation's imports (yourdfpy and trimesh take over a second).
@@ -148,8 +148,8 @@ class MujocoWorld(Node):
             Clock, '/clock', CLOCK_QOS,
             event_callbacks=PublisherEventCallbacks(use_default_callbacks=False))
         self.tf_batch = TransformBatch(self)  # /tf, for every drive's OdomTfFace
-        # Publishes the sensors' topics (sensor_node.py).
-        self.sensor_node = SensorNode(self, own_participant=sensor_participant)
+        # Publishes the sensors' topics, from a participant of its own if it may (sensor_node.py).
+        self.sensor_node = SensorNode(self)
         # Each model the world removes by itself to save the others, with the reason.
         self.removed_models_pub = self.create_publisher(
             RemovedModel, '~/removed_models', REMOVED_MODELS_QOS)
