@@ -25,7 +25,7 @@ setup(
     tests_require=['pytest'],
     entry_points={
         'console_scripts': [
-            'mujoco_world = service_tutorial.world_node.node:main',
+            'mujoco_world = service_tutorial.lesson_world:main',
             'robot_turning_server = service_tutorial.lesson.robot_turning_server:main',
             'robot_turning_client = service_tutorial.lesson.robot_turning_client:main',
             ('robot_turning_action_server = '

@@ -1,16 +1,11 @@
 """Service round trips: the world node in this process, called from the observer."""
 
-import math
 import time
 
 from fleet import core_fleet, fleet_parameters, read_model
 from harness import ExecutorThread, quiet_console
 from report import percentiles, Table
 from service_tutorial.testing.spawns import spawn_robot
-
-# R2-D2 where the lesson spawns it: (-2, 1, 1), turned -90 degrees about z.
-LESSON_POSITION = (-2.0, 1.0, 1.0)
-LESSON_ORIENTATION = (math.sqrt(0.5), 0.0, 0.0, -math.sqrt(0.5))  # (w, x, y, z)
 
 
 class TrivialService:
@@ -31,18 +26,24 @@ class TrivialService:
 
 def spawn_request(index):
     """Return a request that spawns R2-D2 where the lesson does."""
-    from geometry_msgs.msg import Pose
-    from service_tutorial.conversions import fill_pose_msg
+    from service_tutorial.lesson.r2d2 import spawn_pose
     from srv_interfaces.srv import SpawnModel
-    pose = fill_pose_msg(Pose(), LESSON_POSITION, LESSON_ORIENTATION)
     return SpawnModel.Request(model_name='r2d2', model_xml=read_model('r2d2'),
-                              initial_pose=pose, reference_frame='world')
+                              initial_pose=spawn_pose(), reference_frame='world')
 
 
-def timed_core_spawn_and_delete(world, urdf):
-    """Spawn R2-D2 where the lesson does on a ROS-free World, delete it; return both times."""
+def lesson_core_pose():
+    """Return where the lesson spawns R2-D2, for a ROS-free World: position, (w, x, y, z)."""
+    from service_tutorial.lesson.r2d2 import SPAWN_POSITION, SPAWN_YAW
+    from service_tutorial.sim.frames import yaw_quaternion
+    return SPAWN_POSITION, yaw_quaternion(SPAWN_YAW)
+
+
+def timed_core_spawn_and_delete(world, urdf, pose):
+    """Spawn R2-D2 at pose (lesson_core_pose()) on a ROS-free World, delete it; both times."""
+    position, orientation = pose
     start = time.perf_counter()
-    spawn_robot(world, 'r2d2', urdf, position=LESSON_POSITION, orientation=LESSON_ORIENTATION)
+    spawn_robot(world, 'r2d2', urdf, position=position, orientation=orientation)
     middle = time.perf_counter()
     world.delete_model('r2d2')
     return middle - start, time.perf_counter() - middle
@@ -51,14 +52,15 @@ def timed_core_spawn_and_delete(world, urdf):
 def core_round_trips(models_present, calls, *, with_reset=True):
     """Time spawn, delete and reset_world of R2-D2 done directly on a ROS-free World."""
     world = core_fleet(models_present, driving=False)
-    urdf = read_model('r2d2')
+    urdf, pose = read_model('r2d2'), lesson_core_pose()
     spawns, deletes, resets = [], [], []
     for _ in range(calls):
-        spawn, delete = timed_core_spawn_and_delete(world, urdf)
+        spawn, delete = timed_core_spawn_and_delete(world, urdf, pose)
         spawns.append(spawn)
         deletes.append(delete)
     if with_reset:
-        spawn_robot(world, 'r2d2', urdf, position=LESSON_POSITION, orientation=LESSON_ORIENTATION)
+        position, orientation = pose
+        spawn_robot(world, 'r2d2', urdf, position=position, orientation=orientation)
         for _ in range(calls):
             start = time.perf_counter()
             world.reset_world()
@@ -89,7 +91,7 @@ def node_round_trips(observer, models_present, calls, *, with_reset=True, core=N
     world = MujocoWorld(parameter_overrides=overrides)
     trivial = TrivialService()
     executor_thread = ExecutorThread(world, trivial.node)
-    urdf = read_model('r2d2')
+    urdf, pose = read_model('r2d2'), lesson_core_pose()
     try:
         for srv_type, name in ((SpawnModel, '/mujoco/spawn_urdf_model'),
                                (DeleteModel, '/mujoco/delete_model'),
@@ -104,7 +106,7 @@ def node_round_trips(observer, models_present, calls, *, with_reset=True, core=N
             samples = {}
             if core is not None:
                 observer.call(Empty, '/mujoco/pause_physics', Empty.Request())
-                spawn, delete = timed_core_spawn_and_delete(core, urdf)
+                spawn, delete = timed_core_spawn_and_delete(core, urdf, pose)
                 samples['core spawn'], samples['core delete'] = [spawn], [delete]
                 observer.call(Empty, '/mujoco/unpause_physics', Empty.Request())
             samples['spawn'] = observer.timed_calls(

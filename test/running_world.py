@@ -5,8 +5,9 @@ import time
 from geometry_msgs.msg import Pose, Twist
 from rclpy.parameter import Parameter
 from rosgraph_msgs.msg import Clock
-from service_tutorial.conversions import make_pose, seconds_of
-from service_tutorial.world_node.node import MujocoWorld
+from service_tutorial.conversions import seconds_of
+from service_tutorial.lesson.r2d2 import spawn_pose
+from service_tutorial.lesson_world import lesson_world
 from srv_interfaces.srv import DeleteModel, GetModelList, GetModelState, SetModelState
 from srv_interfaces.srv import SpawnModel
 from std_srvs.srv import Empty
@@ -14,15 +15,15 @@ from std_srvs.srv import Empty
 
 def lesson_pose():
     """Return R2-D2's pose in the lesson: (-2, 1, 1), turned -90 degrees about z."""
-    return make_pose(-2.0, 1.0, 1.0, quaternion=(0.0, 0.0, -0.707, 0.707))
+    return spawn_pose()
 
 
 class RunningWorld:
-    """A MujocoWorld spinning on the harness, what it said on /clock, and its services."""
+    """The world as mujoco_world runs it, spinning on the harness: its /clock and services."""
 
     def __init__(self, ros, **parameters):
         self.ros = ros
-        self.node = MujocoWorld(parameter_overrides=[
+        self.node = lesson_world(parameter_overrides=[
             Parameter(name, value=value) for name, value in parameters.items()])
         # Count the ticks of the step timer: each one is a chance for the world to step.
         self.ticks = 0

@@ -20,11 +20,11 @@ from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.signals import SignalHandlerOptions
 from service_tutorial.lesson.model_services import response_text
-from service_tutorial.lesson.turning_limits import ask_turning_request, given_or_asked
-from service_tutorial.lesson.turning_limits import MAX_ANGLE, MAX_ANGULAR_VEL
-from service_tutorial.lesson.turning_limits import parse_pair_or_nothing, TurningInputError
-from service_tutorial.lesson.turning_limits import typed_numbers, VELOCITY_PROMPT
-from service_tutorial.lesson.turning_limits import VELOCITY_TOO_HIGH
+from service_tutorial.lesson.turning_input import ask_turning_request, given_or_asked
+from service_tutorial.lesson.turning_input import MAX_ANGLE, MAX_ANGULAR_VEL
+from service_tutorial.lesson.turning_input import parse_pair_or_nothing, TurningInputError
+from service_tutorial.lesson.turning_input import typed_numbers, VELOCITY_PROMPT
+from service_tutorial.lesson.turning_input import VELOCITY_TOO_HIGH
 from service_tutorial.node_main import program_arguments
 from srv_interfaces.action import TurnRobot
 

@@ -46,7 +46,7 @@ from rclpy.duration import Duration
 from rclpy.node import Node
 from rclpy.task import Future
 from service_tutorial.conversions import seconds_of, yaw_of
-from service_tutorial.lesson.turning_limits import MAX_ANGLE, MAX_ANGULAR_VEL
+from service_tutorial.lesson.turning_input import MAX_ANGLE, MAX_ANGULAR_VEL
 from service_tutorial.node_main import spin_node
 from srv_interfaces.action import TurnRobot
 

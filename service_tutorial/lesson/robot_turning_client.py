@@ -14,9 +14,9 @@ import sys
 import rclpy
 from rclpy.node import Node
 from service_tutorial.lesson.model_services import response_text
-from service_tutorial.lesson.turning_limits import ask_turning_request, given_or_asked
-from service_tutorial.lesson.turning_limits import MAX_ANGULAR_VEL
-from service_tutorial.lesson.turning_limits import parse_pair_or_nothing, parse_turning_request
+from service_tutorial.lesson.turning_input import ask_turning_request, given_or_asked
+from service_tutorial.lesson.turning_input import MAX_ANGULAR_VEL
+from service_tutorial.lesson.turning_input import parse_pair_or_nothing, parse_turning_request
 from service_tutorial.node_main import program_arguments, run_node
 from srv_interfaces.srv import ControlTurningMessage
 

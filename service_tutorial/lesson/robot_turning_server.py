@@ -20,7 +20,7 @@ from rclpy.clock import JumpThreshold
 from rclpy.duration import Duration
 from rclpy.node import Node
 from rclpy.task import Future
-from service_tutorial.lesson.turning_limits import MAX_ANGULAR_VEL
+from service_tutorial.lesson.turning_input import MAX_ANGULAR_VEL
 from service_tutorial.node_main import spin_node
 from srv_interfaces.srv import ControlTurningMessage
 

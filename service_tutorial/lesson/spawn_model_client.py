@@ -15,30 +15,28 @@ from rclpy.node import Node
 from service_tutorial.conversions import make_pose
 from service_tutorial.lesson.client_arguments import parse_client_arguments
 from service_tutorial.lesson.model_services import model_path, response_text, spawn_model
+from service_tutorial.lesson.r2d2 import R2D2_FILE, R2D2_NAME, SPAWN_POSITION, SPAWN_YAW
 from service_tutorial.node_main import program_arguments, run_node
 from service_tutorial.sim.robot_files import parse_xacro_arguments
 from service_tutorial.sim.validation import WorldError
 
-# The lesson's pose: z rotation of -pi/2 as a quaternion (x, y, z, w).
-LESSON_POSITION = (-2.0, 1.0, 1.0)
-LESSON_QUATERNION = (0.0, 0.0, -0.707, 0.707)
-
 
 def add_spawn_arguments(parser):
     """Add the model, pose, namespace and frame options to the command-line parser."""
-    parser.add_argument('--file', default='r2d2.urdf',
+    parser.add_argument('--file', default=R2D2_FILE,
                         help="URDF or xacro file: a path, or a file name in this package's "
                              'models/ folder (default: %(default)s)')
     parser.add_argument('--xacro-arg', action='append', default=[], metavar='NAME:=VALUE',
                         help='argument for a xacro file (repeat for more)')
-    parser.add_argument('--name', default='r2d2', help='model name (default: %(default)s)')
-    parser.add_argument('-x', type=float, default=LESSON_POSITION[0], help='x in m (default: -2)')
-    parser.add_argument('-y', type=float, default=LESSON_POSITION[1], help='y in m (default: 1)')
-    parser.add_argument('-z', type=float, default=LESSON_POSITION[2], help='z in m (default: 1)')
+    parser.add_argument('--name', default=R2D2_NAME, help='model name (default: %(default)s)')
+    x, y, z = SPAWN_POSITION
+    parser.add_argument('-x', type=float, default=x, help='x in m (default: %(default)g)')
+    parser.add_argument('-y', type=float, default=y, help='y in m (default: %(default)g)')
+    parser.add_argument('-z', type=float, default=z, help='z in m (default: %(default)g)')
     orientation = parser.add_mutually_exclusive_group()
     orientation.add_argument('--yaw', type=float, help='heading in rad (default: -pi/2)')
     orientation.add_argument('--quaternion', type=float, nargs=4, metavar=('QX', 'QY', 'QZ', 'QW'),
-                             help='orientation as a quaternion (default: 0 0 -0.707 0.707)')
+                             help='orientation as a quaternion, instead of --yaw')
     parser.add_argument('--namespace', default='',
                         help="namespace of the model's topics (default: none)")
     parser.add_argument('--reference-frame', default='world',
@@ -51,7 +49,7 @@ def parse_arguments(argv):
         argv, 'spawn_model_client', 'Spawn a URDF model through /mujoco/spawn_urdf_model '
         '(by default R2-D2 where the lesson puts it).', add_spawn_arguments)
     if options.yaw is None and options.quaternion is None:
-        options.quaternion = LESSON_QUATERNION
+        options.yaw = SPAWN_YAW
     if not os.path.isfile(options.file):
         options.file = model_path(options.file)
     return options

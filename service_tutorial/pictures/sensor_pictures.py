@@ -15,7 +15,9 @@ import sys
 from ament_index_python.packages import get_package_share_directory
 import numpy as np
 from PIL import Image, ImageDraw
+from service_tutorial.lesson.r2d2 import R2D2_FILE, R2D2_NAME, SPAWN_POSITION, SPAWN_YAW
 from service_tutorial.pictures.image_files import write_png
+from service_tutorial.sim.frames import yaw_quaternion
 from service_tutorial.sim.plugins.camera_sensor import CameraSensor
 from service_tutorial.sim.plugins.ray_sensor import RaySensor
 from service_tutorial.sim.rendering import SceneCamera
@@ -28,7 +30,6 @@ CAMERA_FILE = 'sensors_tinybot_camera.png'
 # Straight above the yard (a hair to the south, so that north is up in the picture).
 TOP_VIEW_POSITION = (0.0, -0.01, 13.0)
 TOP_VIEW_FOVY = 47.0  # degrees: the 10 m yard and its walls, with a margin
-LESSON_R2D2 = ((-2.0, 1.0, 1.0), (math.sqrt(0.5), 0.0, 0.0, -math.sqrt(0.5)))
 SETTLE_TIME = 2.0  # s of simulation for R2-D2 to land
 SCAN_COLOUR = (255, 40, 40)
 BEAM_COLOUR = (255, 140, 140)
@@ -79,8 +80,8 @@ def make_pictures(output, *, yaw=-0.35, size=640):
     world.spawn([
         SpawnOrder.of('tinybot', read_path(model_file('tinybot.urdf')),
                       orientation=(math.cos(yaw / 2), 0.0, 0.0, math.sin(yaw / 2))),
-        SpawnOrder.of('r2d2', read_path(model_file('r2d2.urdf')), position=LESSON_R2D2[0],
-                      orientation=LESSON_R2D2[1])])
+        SpawnOrder.of(R2D2_NAME, read_path(model_file(R2D2_FILE)), position=SPAWN_POSITION,
+                      orientation=yaw_quaternion(SPAWN_YAW))])
     world.step(round(SETTLE_TIME / world.timestep))
     tinybot = world.models['tinybot']
     laser, camera = tinybot.plugin(RaySensor), tinybot.plugin(CameraSensor)

@@ -29,9 +29,10 @@ from rclpy.action import ActionClient
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.signals import SignalHandlerOptions
-from service_tutorial.conversions import make_pose, seconds_of, yaw_of
+from service_tutorial.conversions import seconds_of, yaw_of
 from service_tutorial.lesson import model_services
 from service_tutorial.lesson.model_services import response_text
+from service_tutorial.lesson.r2d2 import spawn_pose
 from service_tutorial.node_main import program_arguments
 from service_tutorial.pictures.recording import TurnRecorder
 from srv_interfaces.action import TurnRobot
@@ -168,7 +169,7 @@ def spawn_r2d2(node):
     """Spawn R2-D2 the lesson's way and show where it landed."""
     response = model_services.spawn_model(
         node, 'r2d2', model_file=model_services.model_path('r2d2.urdf'),
-        pose=make_pose(-2.0, 1.0, 1.0, quaternion=(0.0, 0.0, -0.707, 0.707)),
+        pose=spawn_pose(),
         reference_frame='world')
     say(indent(response_text(response)))
     if not response.success:

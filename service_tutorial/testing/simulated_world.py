@@ -101,10 +101,11 @@ class SimulatedWorld:
             with localhost_discovery():
                 rclpy.init(context=self.context, domain_id=self._claim.domain_id,
                            signal_handler_options=SignalHandlerOptions.NO)
-            # One participant on the world's own domain: Fast DDS 2.14 can hang deleting a
-            # participant while another of the same process and domain sends it discovery data.
+            # In a context of its own, the world publishes its sensors' topics from its own
+            # participant too (world_node/participants.py): the domain's one participant here,
+            # with the test's nodes (add_node), which goes with close() beside no neighbour.
             self.world_node = self._spin(MujocoWorld(
-                sensor_participant=False, context=self.context, namespace=self.namespace,
+                context=self.context, namespace=self.namespace,
                 parameter_overrides=[Parameter(name, value=value) for name, value in
                                      {'paused': True, **parameters}.items()]))
             self.timestep = self.world_node.get_parameter('timestep').value

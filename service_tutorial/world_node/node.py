@@ -86,13 +86,19 @@ def robot_description(order):
 class MujocoWorld(Node):
     """Serves a MuJoCo world the way gazebo_ros serves Gazebo's."""
 
-    def __init__(self, *, sensor_participant=True, **kwargs):
-        """Start the world; sensor_participant: sensor topics in a participant of their own."""
+    def __init__(self, *, web_panel=None, **kwargs):
+        """
+        Start the world.
+
+        web_panel: the panel its web page shows (web:=true), a subclass of web.panel.Panel
+        that adds its controls (lesson_world.py hands it the lesson's); None: the page's own.
+        """
         super().__init__('mujoco', **kwargs)
         self.parameters = parameters = declare_world_parameters(self)  # ParameterError if bad
         self.forwarded_logs = forward_core_logs(self)
+        self._web_panel = web_panel
         try:
-            self._start(parameters, sensor_participant)
+            self._start(parameters)
         except BaseException:
             self.forwarded_logs.stop()
             raise
@@ -106,7 +112,7 @@ class MujocoWorld(Node):
         return super().create_service(srv_type, srv_name, heard_by_pacer(self, callback),
                                       **kwargs)
 
-    def _start(self, parameters, sensor_participant):
+    def _start(self, parameters):
         """Make the world, its services and topics, and the start-up models."""
         # Imported here, after the parameters passed their checks: a bad one ends the program
         # before the simulation's imports (yourdfpy and trimesh take over a second).
@@ -115,7 +121,7 @@ class MujocoWorld(Node):
         from service_tutorial.world_node.standard.named_poses import NamedPoseServices
         from service_tutorial.world_node.standard.spawnables import SpawnableServices
         from service_tutorial.world_node.standard.worlds import WorldServices
-        from service_tutorial.world_node.world_loader import resolve_model_path, WorldLoader
+        from service_tutorial.world_node.world_loader import WorldLoader
         self.world_loader = WorldLoader(self, package_share)
         start_up = self.world_loader.start_up_world(parameters, default_parameters())
         self.world = World(timestep=parameters['timestep'],
@@ -142,8 +148,8 @@ class MujocoWorld(Node):
             Clock, '/clock', CLOCK_QOS,
             event_callbacks=PublisherEventCallbacks(use_default_callbacks=False))
         self.tf_batch = TransformBatch(self)  # /tf, for every drive's OdomTfFace
-        # Publishes the sensors' topics (sensor_node.py).
-        self.sensor_node = SensorNode(self, own_participant=sensor_participant)
+        # Publishes the sensors' topics, from a participant of its own if it may (sensor_node.py).
+        self.sensor_node = SensorNode(self)
         # Each model the world removes by itself to save the others, with the reason.
         self.removed_models_pub = self.create_publisher(
             RemovedModel, '~/removed_models', REMOVED_MODELS_QOS)
@@ -168,7 +174,7 @@ class MujocoWorld(Node):
         if parameters['web']:
             from service_tutorial.world_node.web.page import WebPage
             self.web_page = WebPage(self, parameters['web_host'], parameters['web_port'],
-                                    resolve_model_path)
+                                    self._web_panel)
             self.get_logger().info(f'web page: {self.web_page.address}')
 
         # Every parameter that is not read-only takes effect when it is set.
@@ -392,13 +398,13 @@ class MujocoWorld(Node):
         return super().destroy_node()
 
 
-def main(args=None):
+def main(args=None, *, web_panel=None):
     """
     Run the MuJoCo world until Ctrl-C or a client asks it to quit, then end with status 0.
 
-    A bad parameter ends it with one line, status 2.
+    A bad parameter ends it with one line, status 2. web_panel: as MujocoWorld's.
     """
-    return run_node(lambda: run_or_exit('mujoco_world', MujocoWorld),
+    return run_node(lambda: run_or_exit('mujoco_world', MujocoWorld, web_panel=web_panel),
                     lambda world: rclpy.spin_until_future_complete(world, world.quitting),
                     args=args, interrupted_status=None)
 

@@ -2,9 +2,13 @@
 The package's shape: files and classes of a readable size, and imports that go one way only.
 
 The simulation imports nothing of ROS and nothing of the package outside sim/; the world node
-imports none of its clients: the lesson, the pictures, testing/; the plugins import nothing of
-the URDF builder, which imports them. Each rule has a self-test that shows it catches a
-violation.
+imports none of its clients: the lesson (nor lesson_world.py, which composes the two), the
+pictures, testing/; the lesson reaches the world through ROS, importing of the world node only
+the web page's Panel and PageClient, which its panel extends, and of the simulation only the
+reader of robot files (for the files it sends) and its refusal; the plugins import nothing of the
+URDF builder, which imports them. Each rule has a self-test that shows it catches a violation.
+The lesson's material lives in lesson/: its web panel, its turning input, R2-D2's spawn pose
+and the turning limits, each written once.
 """
 
 import ast
@@ -14,6 +18,7 @@ import pytest
 from repository import ROOT
 
 PACKAGE = os.path.join(ROOT, 'service_tutorial')
+LESSON = os.path.join(PACKAGE, 'lesson')
 MAX_FILE_LINES = 500
 MAX_CLASS_LINES = 500
 # What belongs to ROS, by a module's top-level package: client libraries, interfaces, tools.
@@ -21,6 +26,8 @@ ROS_MODULES = ('rclpy', 'rcl_interfaces', 'srv_interfaces', 'rosidl_runtime_py',
                'rpyutils', 'tf2_ros', 'message_filters')
 ROS_PREFIXES = ('ament_', 'launch', 'rosidl_')
 ROS_SUFFIXES = ('_msgs', '_srvs', '_interfaces')
+# What the lesson's web panel does, which the world node's code never names (lowercased).
+LESSON_NAMES = ('r2d2', 'r2-d2', 'control_robot_angle')
 
 
 def python_files(folder):
@@ -87,7 +94,19 @@ def is_ros_side(module):
 
 def is_a_client_of_the_world(module):
     """Tell whether a module is of the lesson, the pictures or the testing of the world."""
-    return within(module, 'service_tutorial.lesson', 'service_tutorial.pictures',
+    return within(module, 'service_tutorial.lesson', 'service_tutorial.lesson_world',
+                  'service_tutorial.pictures', 'service_tutorial.testing')
+
+
+def reaches_past_ros(module):
+    """Tell whether a module is of the world's code or of its other clients, for the lesson."""
+    if within(module, 'service_tutorial.world_node.web.panel',
+              'service_tutorial.world_node.web.page_client'):
+        return False  # what the lesson's web panel extends
+    if within(module, 'service_tutorial.sim.robot_files', 'service_tutorial.sim.validation'):
+        return False  # the one reader of robot files, for the files the lesson sends
+    return within(module, 'service_tutorial.sim', 'service_tutorial.world_node',
+                  'service_tutorial.lesson_world', 'service_tutorial.pictures',
                   'service_tutorial.testing')
 
 
@@ -100,6 +119,9 @@ IMPORT_RULES = {
     'sim': ('sim', is_ros_side, 'ROS, or the package outside sim/'),
     'world_node': ('world_node', is_a_client_of_the_world,
                    'the lesson, the pictures or testing/'),
+    'lesson': ('lesson', reaches_past_ros,
+               "the world (but the web page's Panel and PageClient and the reader of robot "
+               'files), the pictures or testing/'),
     'plugins': (os.path.join('sim', 'plugins'), is_urdf_builder, 'the URDF builder, sim/urdf/'),
 }
 # For each rule, a module of its folder that breaks it and one that keeps it.
@@ -110,6 +132,9 @@ IMPORT_RULE_EXAMPLES = {
     'world_node': ('service_tutorial.world_node.faces',
                    'def snapshot():\n    from ...pictures.image_files import write_png\n',
                    'from ...sim.world import World\nfrom service_tutorial import conversions\n'),
+    'lesson': ('service_tutorial.lesson',
+               'from ..world_node.node import MujocoWorld\n',
+               'from ..world_node.web.panel import Panel\nfrom . import r2d2\nimport rclpy\n'),
     'plugins': ('service_tutorial.sim.plugins',
                 'from ..urdf.hardened_xml import parse_numbers\n',
                 'from ..description import UrdfError\nfrom service_tutorial.sim import frames\n'),
@@ -198,3 +223,74 @@ def test_the_package_logs_only_through_core_logger():
               if os.path.basename(path) != 'core_logs.py' for node in ast.walk(parse(path))
               if isinstance(node, ast.Call) and ast.unparse(node.func) == 'logging.getLogger']
     assert not direct, 'logging.getLogger instead of core_logger():\n' + '\n'.join(direct)
+
+
+def test_the_lessons_panel_lives_in_lesson_and_the_world_node_names_none_of_it():
+    panels = {}  # file -> the classes in it that extend the web page's Panel
+    for path in python_files(PACKAGE):
+        for node in ast.walk(parse(path)):
+            if isinstance(node, ast.ClassDef) and any(
+                    ast.unparse(base).split('.')[-1] == 'Panel' for base in node.bases):
+                panels.setdefault(relative(path), []).append(node.name)
+    assert panels.get(relative(os.path.join(LESSON, 'web_panel.py'))) == ['LessonPanel']
+    in_world_node = [path for path in panels if path.startswith(relative(
+        os.path.join(PACKAGE, 'world_node')) + os.sep)]
+    assert not in_world_node, f'panels in world_node/: {in_world_node}'
+    # What the lesson's panel does is named nowhere in the world node: R2-D2, the turn.
+    naming = []
+    for path in python_files(os.path.join(PACKAGE, 'world_node')):
+        with open(path, encoding='utf-8') as source:
+            text = source.read().lower()
+        naming += [f'{relative(path)}: {name}' for name in LESSON_NAMES if name in text]
+    assert not naming, "world_node/ names the lesson's material:\n" + '\n'.join(naming)
+
+
+def test_mujoco_world_hands_the_lessons_panel_to_the_world_node():
+    with open(os.path.join(ROOT, 'setup.py'), encoding='utf-8') as setup_file:
+        assert "'mujoco_world = service_tutorial.lesson_world:main'" in setup_file.read()
+    composing = parse(os.path.join(PACKAGE, 'lesson_world.py'))
+    assert 'service_tutorial.lesson.web_panel.LessonPanel' in [
+        module for _, module in imported_modules(composing, 'service_tutorial')]
+
+
+def test_turning_input_lives_in_lesson():
+    found = [relative(path) for path in python_files(PACKAGE)
+             if os.path.basename(path) == 'turning_input.py']
+    assert found == [relative(os.path.join(LESSON, 'turning_input.py'))]
+
+
+def numbers_written(tree):
+    """Return the numeric constants and tuples of numeric constants a module writes."""
+    def number(node):
+        if isinstance(node, ast.UnaryOp) and isinstance(node.op, ast.USub):
+            value = number(node.operand)
+            return None if value is None else -value
+        if isinstance(node, ast.Constant) and type(node.value) in (int, float):
+            return node.value
+        return None
+    found = []
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Tuple):
+            values = [number(element) for element in node.elts]
+            if values and None not in values:
+                found.append(tuple(values))
+        elif number(node) is not None:
+            found.append(number(node))
+    return found
+
+
+def test_numbers_written_finds_constants_and_tuples():
+    tree = ast.parse('A = (-2.0, 1.0, 1.0)\nB = 1.5707\nC = (x, 1.0)\nD = -3\n')
+    written = numbers_written(tree)
+    assert (-2.0, 1.0, 1.0) in written and 1.5707 in written and -3 in written
+    assert (1.0,) not in written
+
+
+@pytest.mark.parametrize('what, value, home', [
+    ("R2-D2's spawn position", (-2.0, 1.0, 1.0), 'r2d2.py'),
+    ("the lesson's top angular velocity", 1.5707, 'turning_input.py'),
+])
+def test_the_lessons_numbers_are_written_once_in_lesson(what, value, home):
+    written = [relative(path) for path in python_files(PACKAGE)
+               if value in numbers_written(parse(path))]
+    assert written == [relative(os.path.join(LESSON, home))], f'{what} written in {written}'

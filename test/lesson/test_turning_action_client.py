@@ -10,7 +10,7 @@ import pytest
 from rclpy.parameter import Parameter
 from service_tutorial.lesson.robot_turning_action_client import ANGLE_PROMPT
 from service_tutorial.lesson.robot_turning_action_server import RobotTurningActionServer
-from service_tutorial.lesson.turning_limits import NOT_A_NUMBER, VELOCITY_TOO_HIGH
+from service_tutorial.lesson.turning_input import NOT_A_NUMBER, VELOCITY_TOO_HIGH
 from test_turning_action_server import ActionWorld, GroundTruth
 
 pytestmark = pytest.mark.ros

@@ -6,8 +6,8 @@ import pytest
 from rclpy.parameter import Parameter
 from service_tutorial.lesson.robot_turning_client import NOT_CARRIED_OUT
 from service_tutorial.lesson.robot_turning_server import RobotTurningServer
-from service_tutorial.lesson.turning_limits import DURATION_PROMPT, NOT_A_NUMBER
-from service_tutorial.lesson.turning_limits import VELOCITY_TOO_HIGH
+from service_tutorial.lesson.turning_input import DURATION_PROMPT, NOT_A_NUMBER
+from service_tutorial.lesson.turning_input import VELOCITY_TOO_HIGH
 
 pytestmark = pytest.mark.ros
 

@@ -10,10 +10,10 @@ from service_tutorial.lesson.robot_turning_action_client import ANGLE_PROMPT, AN
 from service_tutorial.lesson.robot_turning_action_client import ask_turning_goal
 from service_tutorial.lesson.robot_turning_action_client import parse_turning_goal
 from service_tutorial.lesson.robot_turning_action_client import VELOCITY_NOT_POSITIVE
-from service_tutorial.lesson.turning_limits import ask_turning_request, DURATION_NOT_WHOLE
-from service_tutorial.lesson.turning_limits import DURATION_PROMPT, NOT_A_NUMBER
-from service_tutorial.lesson.turning_limits import parse_turning_request, TurningInputError
-from service_tutorial.lesson.turning_limits import VELOCITY_PROMPT, VELOCITY_TOO_HIGH
+from service_tutorial.lesson.turning_input import ask_turning_request, DURATION_NOT_WHOLE
+from service_tutorial.lesson.turning_input import DURATION_PROMPT, NOT_A_NUMBER
+from service_tutorial.lesson.turning_input import parse_turning_request, TurningInputError
+from service_tutorial.lesson.turning_input import VELOCITY_PROMPT, VELOCITY_TOO_HIGH
 
 CLIENTS = ('robot_turning_client', 'robot_turning_action_client')
 # client: (its prompting, what is typed, the pair it takes, the errors logged, the prompts shown)

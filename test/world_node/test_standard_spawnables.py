@@ -16,6 +16,7 @@ import pytest
 from repository import install_package, TEST_MODELS
 from simulation_interfaces.msg import Bounds, Result, SimulatorFeatures
 from simulation_interfaces.srv import GetEntityBounds, GetSimulatorFeatures, GetSpawnables
+from simulation_interfaces.srv import StepSimulation
 from standard_entities import close, CRATE, position_of, spawn_or_fail, stamped
 
 pytestmark = pytest.mark.ros
@@ -29,6 +30,13 @@ PENDULUM = ('<mujoco model="pendulum"><worldbody><body name="arm" pos="0 0 1">'
             '<geom type="box" size="0.05 0.1 0.3" pos="0 0 -0.3" mass="1"/>'
             '</body></worldbody><actuator><motor joint="swing"/></actuator>'
             '<sensor><jointpos joint="swing"/></sensor></mujoco>')
+
+
+def step(world, steps):
+    """Step the paused world with StepSimulation; fail if it does not."""
+    result = world.call(StepSimulation, '/step_simulation',
+                        StepSimulation.Request(steps=steps), timeout=60.0).result
+    assert result.result == Result.RESULT_OK, result.error_message
 
 
 def spawnables(world, sources=(), *, timeout=30.0):
@@ -116,7 +124,9 @@ def test_this_packages_robots_are_offered_with_drives_sensors_and_bounds(ros):
 
 
 def test_an_installed_turtlebot3_xacro_is_offered_spawns_and_drives(ros, my_description):
-    world = ros.start_world(real_time_factor=0.0)
+    # Paused, stepped by StepSimulation: the drive is measured in simulation time, and a command
+    # lasts the whole drive (cmd_vel_timeout 10 s) however slowly the steps come.
+    world = ros.start_world(paused=True, real_time_factor=0.0, cmd_vel_timeout=10.0)
     response = spawnables(world)
     robots = offered(response)
     assert robots[MY_ROBOT_URI].description == \
@@ -145,14 +155,25 @@ def test_an_installed_turtlebot3_xacro_is_offered_spawns_and_drives(ros, my_desc
     # The same box as the spawned entity's, up to its wheels turning a little as it landed.
     assert same_box(corners(robots[MY_ROBOT_URI].spawn_bounds), entity_corners(world, 'burger'),
                     1e-4)
-    world.wait_sim(1.0)
+    step(world, 500)  # 1 s to land and rest
     before = position_of(world, 'burger')
     command = Twist()
     command.linear.x = 0.1
-    world.drive({'/burger/cmd_vel': command}, 2.0)
+    cmd_vel = ros.client_node.create_publisher(Twist, '/burger/cmd_vel', 10)
+    assert ros.wait_for(lambda: cmd_vel.get_subscription_count() > 0)
+    cmd_vel.publish(command)
+    # The world takes the command at its first tick after it came: a few steps until the robot
+    # moves, then 2 s of simulation time.
+    for _ in range(100):
+        if position_of(world, 'burger')[0] - before[0] > 1e-5:
+            break
+        step(world, 2)
+    else:
+        pytest.fail('the command on /burger/cmd_vel never moved the robot')
+    step(world, 1000)
     after = position_of(world, 'burger')
     print(f'\nmy_robot driven at 0.1 m/s for 2 s: from {before} to {after}')
-    assert after[0] - before[0] == pytest.approx(0.2, rel=0.25)
+    assert after[0] - before[0] == pytest.approx(0.2, abs=0.01)
     assert abs(after[1] - before[1]) < 0.03
 
 

@@ -24,6 +24,7 @@ from rclpy.node import Node
 from rclpy.signals import SignalHandlerOptions
 from repository import read_model, TEST_MODELS
 from rosgraph_msgs.msg import Clock
+from sensor_msgs.msg import LaserScan
 from service_tutorial.conversions import seconds_of
 from service_tutorial.testing.simulated_world import SimulatedWorld, SimulationCallError
 from service_tutorial.world_node.parameters import ParameterError
@@ -154,6 +155,19 @@ def test_the_world_is_on_a_graph_of_its_own(mujoco_sim_factory, ros):
     assert not outsider.service_is_ready()
     # And the world answers its own graph all along.
     assert world.simulation_state() == SimulationState.STATE_PAUSED
+
+
+def test_the_sensors_publish_from_the_world_node_the_domains_one_participant(mujoco_sim):
+    # In a context of its own, the world takes no second participant for its sensors
+    # (world_node/participants.py): tinybot's /scan comes from the node mujoco itself.
+    scans = []
+    mujoco_sim.node.create_subscription(LaserScan, '/scan', scans.append, 10)
+    mujoco_sim.step(round(0.2 / mujoco_sim.timestep) + 1)  # the laser scans at 5 Hz
+
+    assert mujoco_sim.wait_for(lambda: scans), 'no scan came'
+    publishers = mujoco_sim.node.get_publishers_info_by_topic('/scan')
+    assert [(info.node_namespace, info.node_name) for info in publishers] == [('/', 'mujoco')]
+    assert mujoco_sim.world_node.sensor_node.publishers == []
 
 
 def test_two_worlds_at_once_do_not_see_each_other(mujoco_sim_factory):

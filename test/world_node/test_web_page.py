@@ -19,9 +19,9 @@ from rclpy.parameter import Parameter
 from running_world import lesson_pose
 from service_tutorial.conversions import make_pose, yaw_of
 from service_tutorial.lesson.robot_turning_server import RobotTurningServer
+from service_tutorial.lesson.turning_input import NOT_A_NUMBER, VELOCITY_TOO_HIGH
 from service_tutorial.sim.plugins.camera_sensor import CameraSensor
 from service_tutorial.sim.plugins.ray_sensor import RaySensor
-from service_tutorial.turning_input import NOT_A_NUMBER, VELOCITY_TOO_HIGH
 from service_tutorial.world_node.pacing import MAX_TICK_SIMULATED
 from service_tutorial.world_node.web.page import UPDATE_RATE
 from srv_interfaces.srv import GetModelList

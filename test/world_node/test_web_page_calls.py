@@ -10,10 +10,10 @@ import threading
 import time
 
 import pytest
+from service_tutorial.lesson.turning_input import NOT_A_NUMBER
+from service_tutorial.lesson.web_panel import DROPPED, NO_TURNING_SERVER
 from service_tutorial.sim.plugins.camera_sensor import CameraSensor
 from service_tutorial.sim.plugins.ray_sensor import RaySensor
-from service_tutorial.turning_input import NOT_A_NUMBER
-from service_tutorial.world_node.web.panel import DROPPED, NO_TURNING_SERVER
 from srv_interfaces.srv import GetModelList
 from web_browser import free_port
 

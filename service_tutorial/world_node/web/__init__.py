@@ -1,1 +1,1 @@
-"""The world node's web page (parameter web): the world in 3D, live, and the lesson's buttons."""
+"""The world node's web page (parameter web): the world and its sensors, live, and a panel."""

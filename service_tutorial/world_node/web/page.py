@@ -1,19 +1,19 @@
 """
-The world node's web page: a viser server with the world in 3D and the lesson's panel.
+The world node's web page: a viser server with the world in 3D, its sensors and a panel.
 
 viser serves its browser client from inside its Python package (no internet, no build, no GPU
 on the server). WebPage.tick() is the node's hook, called on every tick of the step timer: it
 returns at once while no browser is connected, so a page nobody opens costs one comparison a
 tick; while someone watches it sends the poses and the status UPDATE_RATE times a second of
-wall time. The panel's buttons never touch the world: they go through PageClient, a ROS client
-like any other.
+wall time. The page shows the world's own Panel (panel.py), or the panel the world node was
+handed (MujocoWorld(web_panel=...): the lesson's, from service_tutorial/lesson_world.py), which
+adds its buttons to it. Buttons never touch the world: they go through the panel's PageClient,
+a ROS client like any other.
 """
 
 import collections
 import time
 
-from service_tutorial.sim.robot_files import read_path
-from service_tutorial.world_node.web.page_client import PageClient
 from service_tutorial.world_node.web.panel import Panel
 from service_tutorial.world_node.web.scene_view import SceneView
 from service_tutorial.world_node.web.sensor_view import SensorView
@@ -27,8 +27,12 @@ FACTOR_WINDOW = 1.0  # s
 class WebPage:
     """The page of one world node: its server, its 3D view, its panel and its ROS client."""
 
-    def __init__(self, node, host, port, resolve_model_path):
-        """Serve the page of node's world on host:port (viser takes the next port if taken)."""
+    def __init__(self, node, host, port, panel_type=None):
+        """
+        Serve the page of node's world on host:port (viser takes the next port if taken).
+
+        panel_type: the panel to show, Panel or a subclass of it (a contributed panel).
+        """
         import viser  # only with web:=true: it takes a while to import
         self.node = node
         self.world = node.world
@@ -37,13 +41,14 @@ class WebPage:
         self.watchers = 0
         self.server.on_client_connect(self._client_connected)
         self.server.on_client_disconnect(self._client_disconnected)
-        # A new page looks where the world's camera looks: tinybot and the lesson's R2-D2.
+        # A new page looks where the world's camera looks.
         parameters = node.parameters
         self.scene = SceneView(self.server, self.world, parameters['camera_position'],
                                parameters['camera_look_at'], parameters['camera_fovy'])
-        self.client = PageClient(node)
-        r2d2 = read_path(resolve_model_path('r2d2.urdf'), formats=('urdf',))
-        self.panel = Panel(self.server.gui, self.client, r2d2.text)
+        panel_type = panel_type or Panel
+        self.client = panel_type.client_type(node)
+        self.panel = panel_type(self.server.gui, self.client)
+        self.client.start()
         self.sensors = SensorView(self.server, self.panel, self.client, node)
         shown_host = '127.0.0.1' if host in ('', '0.0.0.0') else host
         self.address = f'http://{shown_host}:{self.server.get_port()}'

@@ -1,25 +1,49 @@
 """
-The lesson's turning limits, and what its clients say when a typed value breaks one.
+What the lesson's turning programs take as typed input: its limits, prompts and refusals.
 
-The turning service and action, and the clients that prompt for them, share these: the top
-angular velocity of the lesson (1.5707 rad/s), the largest angle the action turns, the
-prompts and refusals the lesson's client printed, and the parsing that applies them. The
-limits and the parsing live in service_tutorial.turning_input, which the world node's web page
-uses too; they are named here as well, for the lesson's programs.
+The turning service and action, the clients that prompt for them and the lesson's panel on the
+world's web page share these: the top angular velocity of the lesson (1.5707 rad/s), the
+largest angle the action turns, the prompts and refusals the lesson's client printed, and the
+parsing that applies them.
 """
 
+import math
+
 import rclpy.logging
-from service_tutorial.turning_input import DURATION_NOT_WHOLE, MAX_ANGLE, MAX_ANGULAR_VEL
-from service_tutorial.turning_input import MAX_UINT32, NOT_A_NUMBER, parse_turning_request
-from service_tutorial.turning_input import TurningInputError, typed_numbers, VELOCITY_TOO_HIGH
 
-__all__ = ['DURATION_NOT_WHOLE', 'MAX_ANGLE', 'MAX_ANGULAR_VEL', 'MAX_UINT32', 'NOT_A_NUMBER',
-           'parse_turning_request', 'TurningInputError', 'typed_numbers', 'VELOCITY_TOO_HIGH',
-           'DURATION_PROMPT', 'VELOCITY_PROMPT', 'ask_turning_request', 'given_or_asked',
-           'parse_pair_or_nothing']
-
+MAX_ANGULAR_VEL = 1.5707  # rad/s, the lesson's own limit
+MAX_ANGLE = 20.0 * math.pi  # rad, ten turns either way
+MAX_UINT32 = 2**32 - 1
+NOT_A_NUMBER = 'Not a number type number plz !!'
+VELOCITY_TOO_HIGH = 'Velocity too high !!'
+DURATION_NOT_WHOLE = 'Duration must be a whole number of seconds, 0 or more !!'
 DURATION_PROMPT = '> Type turning time duration: '
 VELOCITY_PROMPT = '> Type turning angular velocity: '
+
+
+class TurningInputError(ValueError):
+    """A typed duration or velocity that cannot go into the request."""
+
+
+def typed_numbers(*texts):
+    """Return the typed texts as finite numbers, or raise TurningInputError(NOT_A_NUMBER)."""
+    try:
+        numbers = [float(text) for text in texts]
+    except ValueError:
+        raise TurningInputError(NOT_A_NUMBER) from None
+    if not all(math.isfinite(number) for number in numbers):
+        raise TurningInputError(NOT_A_NUMBER)
+    return numbers
+
+
+def parse_turning_request(duration_text, velocity_text, *, max_angular_vel=MAX_ANGULAR_VEL):
+    """Turn the typed duration and velocity into (time_duration, angular_vel) or raise."""
+    duration, velocity = typed_numbers(duration_text, velocity_text)
+    if duration < 0 or duration != int(duration) or duration > MAX_UINT32:
+        raise TurningInputError(DURATION_NOT_WHOLE)
+    if abs(velocity) > max_angular_vel:
+        raise TurningInputError(VELOCITY_TOO_HIGH)
+    return int(duration), velocity
 
 
 def ask_turning_request(logger, *, read=input, prompts=(DURATION_PROMPT, VELOCITY_PROMPT),
