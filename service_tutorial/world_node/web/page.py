@@ -13,6 +13,7 @@ import collections
 import time
 
 from service_tutorial.sim.robot_files import read_path
+from service_tutorial.world_node.parameters import ParameterError
 from service_tutorial.world_node.web.page_client import PageClient
 from service_tutorial.world_node.web.panel import Panel
 from service_tutorial.world_node.web.scene_view import SceneView
@@ -22,6 +23,19 @@ UPDATE_RATE = 30.0  # Hz of wall time, while a browser is connected
 STATUS_PERIOD = 0.25  # s of wall time between two updates of the status line
 # The real-time factor shown is measured over about this much wall time.
 FACTOR_WINDOW = 1.0  # s
+# The viser that scripts/setup installs; a world asked for its page without it names this.
+VISER_REQUIREMENT = 'viser>=1.0'
+
+
+def import_viser():
+    """Return the viser module, or raise ParameterError saying how to install it."""
+    try:
+        import viser  # only with web:=true: it takes a while to import
+    except ImportError as error:
+        raise ParameterError(
+            f'web:=true needs viser, which does not import here ({error}): install it with '
+            f"python3 -m pip install '{VISER_REQUIREMENT}'") from None
+    return viser
 
 
 class WebPage:
@@ -29,7 +43,7 @@ class WebPage:
 
     def __init__(self, node, host, port, resolve_model_path):
         """Serve the page of node's world on host:port (viser takes the next port if taken)."""
-        import viser  # only with web:=true: it takes a while to import
+        viser = import_viser()
         self.node = node
         self.world = node.world
         self.server = viser.ViserServer(host=host, port=port, label='service_tutorial',
