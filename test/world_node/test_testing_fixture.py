@@ -3,7 +3,8 @@ The pytest fixture for users' tests (service_tutorial.testing): paused, exact, f
 
 A test of it is a user's test: it asks for mujoco_sim, steps the world and asserts what the
 robot did. The README's example runs in test_readme_example.py, and once more here, as a user
-runs it: alone, in a pytest of its own that never called rclpy.init().
+runs it: alone, in a pytest of its own that never called rclpy.init() and takes none of this
+run's options (colcon test's --pytest-args among them).
 """
 
 import math
@@ -234,11 +235,30 @@ def test_reset_puts_the_world_back_at_its_start(mujoco_sim):
     assert mujoco_sim.entity_state('tinybot').pose.position.y == pytest.approx(0.0, abs=1e-4)
 
 
-def test_the_readme_example_runs_alone_as_a_user_runs_it(tmp_path):
+def run_pytest_as_a_user(folder, *arguments, timeout):
+    """Run pytest in folder as a user starts it, with none of this run's settings; return it."""
+    # This run's settings are not the user's: colcon test hands its options (--pytest-args,
+    # its junit file and cache folder) over in PYTEST_ADDOPTS, and pytest-xdist tells its
+    # workers who they are in PYTEST_XDIST_WORKER.
+    environment = {name: value for name, value in os.environ.items()
+                   if not name.startswith('PYTEST_')}
+    return subprocess.run(
+        [sys.executable, '-m', 'pytest', '-q', '-p', 'no:cacheprovider', *arguments],
+        cwd=folder, env=environment, capture_output=True, text=True, timeout=timeout)
+
+
+def test_the_readme_example_runs_alone_as_a_user_runs_it(tmp_path, monkeypatch):
     # A folder of its own: no conftest.py of this suite, no rclpy.init() before the fixture.
-    shutil.copy(os.path.join(HERE, 'test_readme_example.py'), tmp_path / 'test_my_node.py')
-    finished = subprocess.run(
-        [sys.executable, '-m', 'pytest', '-q', '-p', 'no:cacheprovider', 'test_my_node.py'],
-        cwd=tmp_path, capture_output=True, text=True, timeout=300)
+    user_folder = tmp_path / 'user'
+    user_folder.mkdir()
+    shutil.copy(os.path.join(HERE, 'test_readme_example.py'), user_folder / 'test_my_node.py')
+    # This run's options as `colcon test --pytest-args -k runs_alone` gives them: taken by the
+    # user's run, they would select nothing there and write colcon's junit file.
+    colcon = tmp_path / 'build'
+    monkeypatch.setenv('PYTEST_ADDOPTS', f'--tb=short --junit-xml={colcon}/pytest.xml '
+                       f'--junit-prefix=service_tutorial -o cache_dir={colcon}/.pytest_cache '
+                       '-k runs_alone')
+    finished = run_pytest_as_a_user(user_folder, 'test_my_node.py', timeout=300)
     assert finished.returncode == 0, finished.stdout[-3000:] + finished.stderr[-3000:]
     assert '1 passed' in finished.stdout
+    assert not colcon.exists(), "the user's run took this run's options"
