@@ -13,8 +13,10 @@ Load it in a conftest.py or a test module with
   a test needs.
 
 Every world a test started is torn down after it: its nodes (the test's own ones added with
-add_node() too) destroyed, its threads ended, its rclpy Context shut down. The plugin is not
-registered as a pytest11 entry point on purpose: it loads only where a test asks for it.
+add_node() too) destroyed, its threads ended, its rclpy Context shut down. Each world is on a
+ROS domain of its own on the machine, so the workers of pytest-xdist (`pytest -n 2`) never see
+each other's worlds. The plugin is not registered as a pytest11 entry point on purpose: it
+loads only where a test asks for it.
 """
 
 import pytest

@@ -95,6 +95,10 @@ class MujocoWorld(Node):
         """
         super().__init__('mujoco', **kwargs)
         self.parameters = parameters = declare_world_parameters(self)  # ParameterError if bad
+        if parameters['web']:
+            # Before the world is made: without viser the world ends here, as on a bad value.
+            from service_tutorial.world_node.web.page import import_viser
+            import_viser()
         self.forwarded_logs = forward_core_logs(self)
         self._web_panel = web_panel
         try:

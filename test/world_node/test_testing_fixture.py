@@ -3,15 +3,19 @@ The pytest fixture for users' tests (service_tutorial.testing): paused, exact, f
 
 A test of it is a user's test: it asks for mujoco_sim, steps the world and asserts what the
 robot did. The README's example runs in test_readme_example.py, and once more here, as a user
-runs it: alone, in a pytest of its own that never called rclpy.init().
+runs it: alone, in a pytest of its own that never called rclpy.init() and takes none of this
+run's options (colcon test's --pytest-args among them); and under pytest -n 2, where each
+worker's world is on a graph of its own.
 """
 
+import json
 import math
 import os
 import re
 import shutil
 import subprocess
 import sys
+import textwrap
 import threading
 
 from geometry_msgs.msg import Twist
@@ -248,11 +252,83 @@ def test_reset_puts_the_world_back_at_its_start(mujoco_sim):
     assert mujoco_sim.entity_state('tinybot').pose.position.y == pytest.approx(0.0, abs=1e-4)
 
 
-def test_the_readme_example_runs_alone_as_a_user_runs_it(tmp_path):
+def run_pytest_as_a_user(folder, *arguments, timeout):
+    """Run pytest in folder as a user starts it, with none of this run's settings; return it."""
+    # This run's settings are not the user's: colcon test hands its options (--pytest-args,
+    # its junit file and cache folder) over in PYTEST_ADDOPTS, and pytest-xdist tells its
+    # workers who they are in PYTEST_XDIST_WORKER.
+    environment = {name: value for name, value in os.environ.items()
+                   if not name.startswith('PYTEST_')}
+    return subprocess.run(
+        [sys.executable, '-m', 'pytest', '-q', '-p', 'no:cacheprovider', *arguments],
+        cwd=folder, env=environment, capture_output=True, text=True, timeout=timeout)
+
+
+def test_the_readme_example_runs_alone_as_a_user_runs_it(tmp_path, monkeypatch):
     # A folder of its own: no conftest.py of this suite, no rclpy.init() before the fixture.
-    shutil.copy(os.path.join(HERE, 'test_readme_example.py'), tmp_path / 'test_my_node.py')
-    finished = subprocess.run(
-        [sys.executable, '-m', 'pytest', '-q', '-p', 'no:cacheprovider', 'test_my_node.py'],
-        cwd=tmp_path, capture_output=True, text=True, timeout=300)
+    user_folder = tmp_path / 'user'
+    user_folder.mkdir()
+    shutil.copy(os.path.join(HERE, 'test_readme_example.py'), user_folder / 'test_my_node.py')
+    # This run's options as `colcon test --pytest-args -k runs_alone` gives them: taken by the
+    # user's run, they would select nothing there and write colcon's junit file.
+    colcon = tmp_path / 'build'
+    monkeypatch.setenv('PYTEST_ADDOPTS', f'--tb=short --junit-xml={colcon}/pytest.xml '
+                       f'--junit-prefix=service_tutorial -o cache_dir={colcon}/.pytest_cache '
+                       '-k runs_alone')
+    finished = run_pytest_as_a_user(user_folder, 'test_my_node.py', timeout=300)
     assert finished.returncode == 0, finished.stdout[-3000:] + finished.stderr[-3000:]
     assert '1 passed' in finished.stdout
+    assert not colcon.exists(), "the user's run took this run's options"
+
+
+# A user's test module for pytest -n 2: its two tests, one on each worker, spawn the same names
+# in worlds of their own, and each looks at its world while the other's is up with the same
+# names. Were the two worlds on one graph, a spawn, a list or a pose would reach the wrong one.
+TWO_WORKERS = textwrap.dedent('''\
+    """Two tests on two workers: the same names spawned, each world seen only by its own test."""
+
+    import json
+    import os
+    import pathlib
+
+    import pytest
+
+    pytest_plugins = ['service_tutorial.testing.fixtures']
+
+    MEETING = pathlib.Path(__file__).parent / 'meeting'
+    R2D2 = 'package://service_tutorial/models/r2d2.urdf'
+
+
+    def both(suffix):
+        return len(list(MEETING.glob('*' + suffix))) == 2
+
+
+    @pytest.mark.parametrize('x', [2.0, -2.0])
+    def test_a_world_of_its_own(mujoco_sim, x):
+        worker = os.environ['PYTEST_XDIST_WORKER']
+        mujoco_sim.set_entity_state('tinybot', (x, 0.0, 0.1))
+        mujoco_sim.spawn_entity('r2d2', R2D2, (x, 1.0, 1.0))
+        (MEETING / f'{worker}.json').write_text(
+            json.dumps({'domain_id': mujoco_sim.domain_id, 'x': x}))
+        assert mujoco_sim.wait_for(lambda: both('.json'), timeout=60.0), 'the other never came'
+        mujoco_sim.step(10)
+        assert sorted(mujoco_sim.get_entities()) == ['r2d2', 'tinybot']
+        for name in ('tinybot', 'r2d2'):
+            assert mujoco_sim.entity_state(name).pose.position.x == pytest.approx(x, abs=0.01)
+        (MEETING / f'{worker}.done').touch()
+        assert mujoco_sim.wait_for(lambda: both('.done'), timeout=60.0), 'the other never looked'
+''')
+
+
+def test_under_pytest_xdist_each_worker_has_worlds_of_its_own_on_its_own_domain(tmp_path):
+    user_folder = tmp_path / 'user'
+    meeting = user_folder / 'meeting'
+    meeting.mkdir(parents=True)
+    (user_folder / 'test_two_workers.py').write_text(TWO_WORKERS)
+    finished = run_pytest_as_a_user(user_folder, '-n', '2', 'test_two_workers.py', timeout=120)
+    assert finished.returncode == 0, finished.stdout[-3000:] + finished.stderr[-3000:]
+    assert '2 passed' in finished.stdout
+    worlds = {path.stem: json.loads(path.read_text()) for path in meeting.glob('*.json')}
+    assert sorted(worlds) == ['gw0', 'gw1'], 'the two tests did not run on two workers'
+    assert worlds['gw0']['domain_id'] != worlds['gw1']['domain_id']
+    assert sorted(world['x'] for world in worlds.values()) == [-2.0, 2.0]

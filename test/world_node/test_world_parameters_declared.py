@@ -4,7 +4,8 @@ The world node's parameters as declared: types, ranges, descriptions and the val
 No world runs here. The parameters are declared on a plain node, as the world node declares
 them, and set over ROS as `ros2 param set` does; bad values at start-up are also given to the
 installed `mujoco_world`, one process per value, a few at a time, each of which must end at
-once. What a value does to a running world is test_world_parameters_running's part.
+once, as must web:=true where viser does not import. What a value does to a running world is
+test_world_parameters_running's part.
 """
 
 from concurrent.futures import ThreadPoolExecutor
@@ -21,9 +22,10 @@ from rcl_interfaces.msg import ParameterType
 from rcl_interfaces.srv import DescribeParameters
 from rclpy.node import Node
 from rclpy.parameter import Parameter
-from repository import ROOT
+from repository import read_file, ROOT
 from service_tutorial.world_node.parameters import declare_world_parameters, default_parameters
 from service_tutorial.world_node.parameters import run_or_exit, WORLD_PARAMETERS
+from service_tutorial.world_node.web.page import VISER_REQUIREMENT
 import yaml
 
 pytestmark = pytest.mark.ros
@@ -177,6 +179,27 @@ def test_a_bad_value_at_start_up_ends_the_world_with_one_line_naming_it_and_stat
         assert 'has the wrong type' in line
     else:  # out of range, or (model details) not one per model
         assert OUT_OF_RANGE[name][1] in line
+
+
+# First on the world's PYTHONPATH, it makes `import viser` fail as where viser is not installed.
+NO_VISER = "raise ModuleNotFoundError(\"No module named 'viser'\", name='viser')\n"
+
+
+def test_web_without_viser_ends_the_world_with_how_to_install_it_and_status_2(tmp_path):
+    shim = tmp_path / 'no_viser' / 'viser'
+    shim.mkdir(parents=True)
+    (shim / '__init__.py').write_text(NO_VISER)
+    python_path = os.pathsep.join(filter(None, [str(shim.parent), os.environ.get('PYTHONPATH')]))
+    run = subprocess.run([*world_command(), '--ros-args', '-p', 'web:=true'],
+                         env={**os.environ, 'PYTHONPATH': python_path},
+                         capture_output=True, text=True, timeout=60)
+    lines = run.stderr.strip().splitlines()
+    assert run.returncode == 2 and len(lines) == 1, run.stderr
+    assert lines[0].startswith('mujoco_world: web:=true needs viser, which does not import here '
+                               "(No module named 'viser')"), lines[0]
+    assert lines[0].endswith(f"install it with python3 -m pip install '{VISER_REQUIREMENT}'")
+    # The viser scripts/setup installs: the line and the set-up never disagree.
+    assert f"'{VISER_REQUIREMENT}'" in read_file(os.path.join(ROOT, 'scripts', 'setup'))
 
 
 def test_defaults_need_no_arguments(rclpy_session):

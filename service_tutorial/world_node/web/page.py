@@ -14,6 +14,7 @@ a ROS client like any other.
 import collections
 import time
 
+from service_tutorial.world_node.parameters import ParameterError
 from service_tutorial.world_node.web.panel import Panel
 from service_tutorial.world_node.web.scene_view import SceneView
 from service_tutorial.world_node.web.sensor_view import SensorView
@@ -22,6 +23,19 @@ UPDATE_RATE = 30.0  # Hz of wall time, while a browser is connected
 STATUS_PERIOD = 0.25  # s of wall time between two updates of the status line
 # The real-time factor shown is measured over about this much wall time.
 FACTOR_WINDOW = 1.0  # s
+# The viser that scripts/setup installs; a world asked for its page without it names this.
+VISER_REQUIREMENT = 'viser>=1.0'
+
+
+def import_viser():
+    """Return the viser module, or raise ParameterError saying how to install it."""
+    try:
+        import viser  # only with web:=true: it takes a while to import
+    except ImportError as error:
+        raise ParameterError(
+            f'web:=true needs viser, which does not import here ({error}): install it with '
+            f"python3 -m pip install '{VISER_REQUIREMENT}'") from None
+    return viser
 
 
 class WebPage:
@@ -33,7 +47,7 @@ class WebPage:
 
         panel_type: the panel to show, Panel or a subclass of it (a contributed panel).
         """
-        import viser  # only with web:=true: it takes a while to import
+        viser = import_viser()
         self.node = node
         self.world = node.world
         self.server = viser.ViserServer(host=host, port=port, label='service_tutorial',
