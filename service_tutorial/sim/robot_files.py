@@ -74,7 +74,7 @@ def read_path(path, *, xacro_arguments=None, formats=ALL_FORMATS, what='robot fi
     file is, for the refusal.
     """
     path = os.path.abspath(path)
-    return _read_file(path, f'{what} {quoted(path)}', xacro_arguments, formats)
+    return _read_file(path, f"{what} '{path}'", xacro_arguments, formats)
 
 
 def read_text(text, what='resource_string', *, formats=ALL_FORMATS):
