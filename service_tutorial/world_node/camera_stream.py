@@ -46,7 +46,7 @@ class CameraStream:
         self.next_due = math.inf  # simulation time of the next frame; inf: nobody listens
         self.image_pub = self.info_pub = None
         self._watch = None  # SubscriberWatch of both topics while enabled
-        self.snapshot_srv = node.create_service(
+        self.snapshot_srv = node.serve(
             Trigger, '~/save_snapshot', self.save_snapshot_callback)
         self.configure(parameters)
 

@@ -27,23 +27,23 @@ class GazeboServices:
         """Serve the world of node under node's private namespace."""
         self.node = node
         self.world = node.world
-        self.spawn_srv = node.create_service(
+        self.spawn_srv = node.serve(
             SpawnModel, '~/spawn_urdf_model', self.spawn_model_callback)
-        self.delete_srv = node.create_service(
+        self.delete_srv = node.serve(
             DeleteModel, '~/delete_model', self.delete_model_callback)
-        self.reset_simulation_srv = node.create_service(
+        self.reset_simulation_srv = node.serve(
             Empty, '~/reset_simulation', self.reset_simulation_callback)
-        self.reset_world_srv = node.create_service(
+        self.reset_world_srv = node.serve(
             Empty, '~/reset_world', self.reset_world_callback)
-        self.pause_srv = node.create_service(
+        self.pause_srv = node.serve(
             Empty, '~/pause_physics', self.pause_physics_callback)
-        self.unpause_srv = node.create_service(
+        self.unpause_srv = node.serve(
             Empty, '~/unpause_physics', self.unpause_physics_callback)
-        self.model_list_srv = node.create_service(
+        self.model_list_srv = node.serve(
             GetModelList, '~/get_model_list', self.get_model_list_callback)
-        self.get_state_srv = node.create_service(
+        self.get_state_srv = node.serve(
             GetModelState, '~/get_model_state', self.get_model_state_callback)
-        self.set_state_srv = node.create_service(
+        self.set_state_srv = node.serve(
             SetModelState, '~/set_model_state', self.set_model_state_callback)
 
     def spawn_model_callback(self, request, response):

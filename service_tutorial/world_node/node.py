@@ -111,10 +111,10 @@ class MujocoWorld(Node):
             f'timestep {self.world.timestep} s, real_time_factor '
             f'{parameters["real_time_factor"]}')
 
-    def create_service(self, srv_type, srv_name, callback, **kwargs):
-        """Create a service whose answers the pacer hears of (Pacer.answered)."""
-        return super().create_service(srv_type, srv_name, heard_by_pacer(self, callback),
-                                      **kwargs)
+    def serve(self, srv_type, srv_name, callback, **kwargs):
+        """Create a service of the world, whose answers the pacer hears of (Pacer.answered)."""
+        return self.create_service(srv_type, srv_name, heard_by_pacer(self.pacer, callback),
+                                   **kwargs)
 
     def _start(self, parameters):
         """Make the world, its services and topics, and the start-up models."""

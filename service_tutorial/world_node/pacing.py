@@ -89,28 +89,19 @@ FOLLOW_UP = 0.01
 NANOSECONDS = 1_000_000_000
 
 
-def heard_by_pacer(node, callback):
-    """
-    Return a service callback that tells node.pacer (Pacer.answered) each time it has answered.
-
-    The node's parameter services come before its pacer, which they leave alone.
-    """
-    def answered():
-        pacer = getattr(node, 'pacer', None)
-        if pacer is not None:
-            pacer.answered()
-
+def heard_by_pacer(pacer, callback):
+    """Return a service callback that tells pacer (Pacer.answered) each time it has answered."""
     def answer(request, response):
         try:
             return callback(request, response)
         finally:
-            answered()
+            pacer.answered()
 
     async def answer_when_done(request, response):  # a callback that waits (stepping)
         try:
             return await callback(request, response)
         finally:
-            answered()
+            pacer.answered()
     return answer_when_done if inspect.iscoroutinefunction(callback) else answer
 
 

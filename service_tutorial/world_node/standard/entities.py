@@ -56,25 +56,25 @@ class EntityServices:
         # Each answer's messages are kept for its next call.
         self.states = EntityStates(self.world)
         self.state = EntityStates(self.world)
-        self.spawn_entity_srv = node.create_service(
+        self.spawn_entity_srv = node.serve(
             SpawnEntity, 'spawn_entity', self.spawn_entity_callback)
-        self.spawn_entities_srv = node.create_service(
+        self.spawn_entities_srv = node.serve(
             SpawnEntities, 'spawn_entities', self.spawn_entities_callback)
-        self.delete_entity_srv = node.create_service(
+        self.delete_entity_srv = node.serve(
             DeleteEntity, 'delete_entity', self.delete_entity_callback)
-        self.get_entities_srv = node.create_service(
+        self.get_entities_srv = node.serve(
             GetEntities, 'get_entities', self.get_entities_callback)
-        self.get_entities_states_srv = node.create_service(
+        self.get_entities_states_srv = node.serve(
             GetEntitiesStates, 'get_entities_states', self.get_entities_states_callback)
-        self.get_entity_state_srv = node.create_service(
+        self.get_entity_state_srv = node.serve(
             GetEntityState, 'get_entity_state', self.get_entity_state_callback)
-        self.set_entity_state_srv = node.create_service(
+        self.set_entity_state_srv = node.serve(
             SetEntityState, 'set_entity_state', self.set_entity_state_callback)
-        self.get_entity_info_srv = node.create_service(
+        self.get_entity_info_srv = node.serve(
             GetEntityInfo, 'get_entity_info', self.get_entity_info_callback)
-        self.set_entity_info_srv = node.create_service(
+        self.set_entity_info_srv = node.serve(
             SetEntityInfo, 'set_entity_info', self.set_entity_info_callback)
-        self.get_entity_bounds_srv = node.create_service(
+        self.get_entity_bounds_srv = node.serve(
             GetEntityBounds, 'get_entity_bounds', self.get_entity_bounds_callback)
 
     # --- spawning and deleting ----------------------------------------------------------------

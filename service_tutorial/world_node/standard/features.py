@@ -23,7 +23,7 @@ class FeatureService:
     def __init__(self, node, groups):
         """Answer for groups, objects whose FEATURES (and SPAWN_FORMATS) say what they serve."""
         self.features = gathered_features(groups)
-        self.features_srv = node.create_service(
+        self.features_srv = node.serve(
             GetSimulatorFeatures, 'get_simulator_features', self.get_simulator_features_callback)
 
     def get_simulator_features_callback(self, request, response):

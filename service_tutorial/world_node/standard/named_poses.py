@@ -27,9 +27,9 @@ class NamedPoseServices:
         """Serve the named poses of node's current world (node.world_loader)."""
         self.node = node
         self.loader = node.world_loader
-        self.get_named_poses_srv = node.create_service(
+        self.get_named_poses_srv = node.serve(
             GetNamedPoses, 'get_named_poses', self.get_named_poses_callback)
-        self.get_named_pose_bounds_srv = node.create_service(
+        self.get_named_pose_bounds_srv = node.serve(
             GetNamedPoseBounds, 'get_named_pose_bounds', self.get_named_pose_bounds_callback)
 
     def get_named_poses_callback(self, request, response):

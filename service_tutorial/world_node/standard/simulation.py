@@ -62,11 +62,11 @@ class SimulationServices:
         self.world = node.world
         self.stopped = False  # paused by a stop, and not played, paused or stepped since
         node.parameters.on_change(self.paused_changed, ['paused'])
-        self.get_state_srv = node.create_service(
+        self.get_state_srv = node.serve(
             GetSimulationState, 'get_simulation_state', self.get_simulation_state_callback)
-        self.set_state_srv = node.create_service(
+        self.set_state_srv = node.serve(
             SetSimulationState, 'set_simulation_state', self.set_simulation_state_callback)
-        self.reset_srv = node.create_service(
+        self.reset_srv = node.serve(
             ResetSimulation, 'reset_simulation', self.reset_simulation_callback)
 
     def state(self):

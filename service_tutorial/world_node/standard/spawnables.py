@@ -49,7 +49,7 @@ class SpawnableServices:
         self.node = node
         self.shares = shares
         self.reader = RobotFileReader(package_share, self.plugin_words)
-        self.get_spawnables_srv = node.create_service(
+        self.get_spawnables_srv = node.serve(
             GetSpawnables, 'get_spawnables', self.get_spawnables_callback)
 
     def get_spawnables_callback(self, request, response):

@@ -53,7 +53,7 @@ class SteppingServices:
         # These callbacks wait for the step timer, which runs in the node's default group (one
         # at a time): waiting in that group too, they would keep the timer from ever running.
         self.stepping_group = ReentrantCallbackGroup()
-        self.step_srv = node.create_service(
+        self.step_srv = node.serve(
             StepSimulation, 'step_simulation', self.step_simulation_callback,
             callback_group=self.stepping_group)
         self.simulate_steps_server = ActionServer(

@@ -51,13 +51,13 @@ class WorldServices:
         self.simulation = simulation
         self.package_share = package_share
         self.loader = node.world_loader
-        self.load_world_srv = node.create_service(
+        self.load_world_srv = node.serve(
             LoadWorld, 'load_world', self.load_world_callback)
-        self.unload_world_srv = node.create_service(
+        self.unload_world_srv = node.serve(
             UnloadWorld, 'unload_world', self.unload_world_callback)
-        self.get_current_world_srv = node.create_service(
+        self.get_current_world_srv = node.serve(
             GetCurrentWorld, 'get_current_world', self.get_current_world_callback)
-        self.get_available_worlds_srv = node.create_service(
+        self.get_available_worlds_srv = node.serve(
             GetAvailableWorlds, 'get_available_worlds', self.get_available_worlds_callback)
 
     def load_world_callback(self, request, response):
