@@ -16,7 +16,7 @@ from service_tutorial.sim import validation
 from service_tutorial.sim.urdf.hardened_xml import MAX_MODEL_XML_BYTES
 from service_tutorial.world_node import node
 from simulation_interfaces.msg import Result, SpawnResult
-from simulation_interfaces.srv import GetSpawnables
+from simulation_interfaces.srv import GetSpawnables, UnloadWorld
 from standard_entities import snapshot, spawn, spawn_or_fail, stamped
 
 pytestmark = pytest.mark.ros
@@ -142,3 +142,15 @@ def test_a_good_spawn_is_judged_once_too(world, monkeypatch):
     assert spawn_or_fail(world, name='crate', resource_string=CRATE,
                          initial_pose=stamped(2.0, 0.0, 0.5)) == 'crate'
     assert calls == ['r2d2', 'crate']
+
+
+def test_a_spawn_with_no_world_reads_the_same_both_ways(world):
+    unloaded = world.call(UnloadWorld, '/unload_world', UnloadWorld.Request()).result
+    assert unloaded.result == Result.RESULT_OK, unloaded.error_message
+    lesson, standard = both_requests(world)
+    assert not lesson.success
+    assert standard.result.result == Result.RESULT_OPERATION_FAILED
+    reason = standard.result.error_message.removeprefix('SpawnEntity: ')
+    assert reason.startswith('no world is loaded')
+    assert lesson.status_message == f'SpawnModel: {reason}'
+    assert world.models() == []
