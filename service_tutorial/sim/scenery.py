@@ -22,6 +22,8 @@ from service_tutorial.sim.validation import WorldError
 # Names of the scenery's elements in the world's model; no model name holds a '/'.
 SCENERY_PREFIX = 'scenery/'
 NOT_STATIC = Reason.UNSUPPORTED_CONTENT  # what scenery may not hold: joints, plugins...
+# The formats of a scenery file; an SDF world's static models are its scenery (from_sdf).
+SCENERY_FORMATS = ('urdf', 'mjcf')
 
 
 class SceneryError(WorldError):
@@ -34,7 +36,7 @@ class Scenery:
     def __init__(self, path, *, package_resolver=None):
         """Read and check a URDF or MJCF file of static obstacles, or raise SceneryError."""
         self.path = os.path.abspath(path)
-        self._load(_read(read_path, self.path, what='scenery file'),
+        self._load(_read(read_path, self.path, what='scenery file', formats=SCENERY_FORMATS),
                    f'scenery file {quoted(path)}', package_resolver)
 
     @classmethod
@@ -42,7 +44,8 @@ class Scenery:
         """Return the Scenery of a URDF or MJCF text that names no file, or raise SceneryError."""
         scenery = cls.__new__(cls)
         scenery.path = None
-        scenery._load(_read(read_text, text, what), what, package_resolver)
+        scenery._load(_read(read_text, text, what, formats=SCENERY_FORMATS), what,
+                      package_resolver)
         return scenery
 
     def _load(self, source, what, package_resolver):
