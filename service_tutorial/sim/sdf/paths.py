@@ -173,6 +173,7 @@ class SdfPaths:
         Raise UriRefused for a uri that may not be read, UriMissing for one that names nothing.
         """
         shown = f'{what} {quoted(uri)}'
+        base_dir = os.path.realpath(base_dir) if base_dir else None
         if len(uri) > MAX_URI_LENGTH or '\0' in uri or not uri.strip():
             raise UriRefused(f'{shown} is no uri')
         scheme, separator, rest = uri.partition('://')

@@ -54,8 +54,9 @@ class SdfWorld:
     static_models: tuple = ()  # (SdfModel, world pose) of each static model
     entities: tuple = ()  # SdfEntity of each moving model
     not_simulated: tuple = ()  # what the world holds and does not simulate, named
-    left_out: tuple = ()  # notes on the models left out
+    left_out: tuple = ()  # names of the moving models left out: nothing of them collides
     files: tuple = ()  # the files it was read from, includes and model.config
+    version: tuple = (1, 11)  # its SDF's
 
 
 def world_name(root, what):
@@ -117,9 +118,7 @@ def read_sdf_world(text, what, base_dir, package_resolver, read_file):
         names.add(entity_name)
         if not any(not shape.missing for link in model.links for shape in link.collisions):
             if any(shape.missing for link in model.links for shape in link.collisions):
-                left_out.append(f'model {quoted(model.name)} is left out: none of its '
-                                'collisions is left once its missing meshes are, and it '
-                                'would fall for ever')
+                left_out.append(model.name)
                 continue
         entities.append(SdfEntity(name=entity_name, text=_entity_text(model, entity_name,
                                                                       element_static),
@@ -128,7 +127,7 @@ def read_sdf_world(text, what, base_dir, package_resolver, read_file):
     return SdfWorld(name=name, timestep=timestep, gravity=gravity,
                     static_models=tuple(static_models), entities=tuple(entities),
                     not_simulated=tuple(reading.notes), left_out=tuple(left_out),
-                    files=tuple(dict.fromkeys(reading.files)))
+                    files=tuple(dict.fromkeys(reading.files)), version=version)
 
 
 def _top_model(reading, element, version, base_dir, shown):
