@@ -216,8 +216,8 @@ class World:
 
     def load(self, scenery, *, timestep=None, gravity=None):
         """Take a new scenery (a Scenery or None) with no models, at time 0, and new physics."""
-        timestep, gravity = _physics(timestep or self._timestep, (
-            self._scene.gravity if gravity is None else gravity))
+        timestep, gravity = _physics(self._timestep if timestep is None else timestep,
+                                     self._scene.gravity if gravity is None else gravity)
         if timestep != self._timestep:  # robots are built for their world's timestep
             self._timestep = timestep
             self._descriptions = DescriptionCache(self._package_resolver, timestep)
