@@ -109,6 +109,9 @@ def targets(tables):
         for row in by_key['spawn_cost'].rows:
             rows.append([f'World / MuJoCo, {row[0]}, {row[1]} present', row[5], row[6],
                          row[7]])
+    if 'sdf_spawn' in by_key:
+        for row in by_key['sdf_spawn'].rows:
+            rows.append([f'{row[0]}, {row[1]} present', row[5], row[6], row[7]])
     if 'free_running' in by_key:
         for row in by_key['free_running'].rows:
             rows.append([f'free-running ratio to raw mj_step, {row[0]} robot(s)', row[3],

@@ -15,6 +15,7 @@ from fleet import core_fleet, fleet_position, model_path, read_model
 import mujoco
 import numpy as np
 from report import Table
+from sdf_twins import sdf_twin
 from service_tutorial.testing.spawns import spawn_robot
 
 SPAWN_POSITION = (-2.0, 1.0, 1.0)
@@ -23,6 +24,8 @@ COLD, WARM = 'cold', 'warm'
 SPAWN_LIMITS = {COLD: 5.0, WARM: 1.5}
 DELETE_LIMIT = 1.5
 BOX_LIMIT = 2.0
+# A cold spawn of a robot from SDF: at most this many times the same robot's from URDF.
+SDF_LIMIT = 1.2
 BOX_URDF = """<?xml version="1.0"?>
 <robot name="box">
   <link name="box_link">
@@ -173,6 +176,47 @@ NOTE = ('World: spawn_urdf / delete_model on a ROS-free World holding that many 
         'the World gives it) + attach_body + recompile; spec.delete + recompile. The two take '
         'turns. cold: every spawn a URDF text not seen before; warm: the same text again. The '
         'box row gives totals in ms, not p50s.')
+
+
+def sdf_spawn_row(present, calls):
+    """
+    Return the row of cold spawns of R2-D2 from its SDF twin against the same from its URDF.
+
+    Each spawn is of a text the world has not seen; SDF and URDF take turns, then the robot
+    is deleted again.
+    """
+    urdf = read_model('r2d2')
+    sdf = sdf_twin(urdf)
+    model_dir = os.path.dirname(model_path('r2d2'))
+    world = core_fleet(present, driving=False)
+    timings = {'sdf': [], 'urdf': []}
+    for index in range(calls + 1):  # the first of each warms up
+        for model_format, text in (('sdf', sdf.replace('</sdf>', f'<!-- {index} --></sdf>')),
+                                   ('urdf', new_text(urdf, index))):
+            taken, _ = _timed(spawn_robot, world, 'spawned', text, position=SPAWN_POSITION,
+                              base_dir=model_dir, model_format=model_format)
+            world.delete_model('spawned')
+            if index > 0:
+                timings[model_format].append(taken)
+    sdf_p50, urdf_p50 = (float(np.median(timings[key])) * 1e3 for key in ('sdf', 'urdf'))
+    ratio = sdf_p50 / urdf_p50
+    return ['cold spawn r2d2, SDF / URDF', present, calls, sdf_p50, urdf_p50, ratio, SDF_LIMIT,
+            ratio <= SDF_LIMIT]
+
+
+def sdf_spawn_table(config):
+    """Spawn a robot from SDF on a World in this process against the same from URDF."""
+    table = Table('sdf_spawn', 'Spawn from SDF on World, no ROS, against the same robot from '
+                  'URDF', [('figure', ''), ('models present', 'd'), ('calls', 'd'),
+                           ('SDF p50 ms', '.3f'), ('URDF p50 ms', '.3f'), ('ratio', '.2f'),
+                           ('limit', '.1f'), ('within', '')])
+    table.rows = [sdf_spawn_row(present, config.cost_calls) for present in config.cost_counts]
+    table.note = ('R2-D2 from models/r2d2.urdf, and from its SDF twin (sdf_twins.py: the same '
+                  "links, joints, inertials and shapes as sdformat's URDF import writes them), "
+                  'spawned with spawn_robot on a ROS-free World holding that many tinybots '
+                  'and deleted again, in turns; every text one the world has not seen (cold): '
+                  'the reading, the frames and the build of the spec count, and the attach.')
+    return table
 
 
 def spawn_cost_table(config):

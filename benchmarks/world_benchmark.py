@@ -40,7 +40,7 @@ from report import machine, targets, write_json
 from round_trips import round_trip_table
 from sensors import sensor_table
 from service_tutorial.testing.isolation import isolate_ros_graph
-from spawn_cost import spawn_cost_table
+from spawn_cost import sdf_spawn_table, spawn_cost_table
 from spawn_growth import growth_table
 from speed import speed_tables
 from standard_interfaces import standard_table
@@ -127,7 +127,7 @@ def run(config, *, sections=SECTIONS, report=print):
         'speed': lambda: speed_tables(observer, config),
         'turning': lambda: turning_tables(observer, config),
         'core': lambda: [core_table(config)],
-        'spawn_cost': lambda: [spawn_cost_table(config)],
+        'spawn_cost': lambda: [spawn_cost_table(config), sdf_spawn_table(config)],
         'camera': lambda: [camera_table(observer, config)],
         'sensors': lambda: [sensor_table(observer, config)],
         'answers': lambda: [answers_table(observer, config)],

@@ -3,7 +3,8 @@ The robots a world has built from their texts, kept so that the same text spawns
 
 Building a robot (parsing, checks, yourdfpy, the spec builder) took most of a spawn; a fleet
 spawns one description many times. A description is kept under a digest of its text and the
-folder its meshes resolve from, and used again only while its mesh files are unchanged. A
+folder its meshes resolve from, and used again only while its mesh files (and the files an SDF
+model includes) are unchanged. A
 description with missing meshes is not kept: the files may turn up. Spawning never changes a
 description: the world's spec attaches a copy of it. Within one batch, a fleet's orders share
 one text: it is digested and its meshes checked once (for_batch()).
@@ -19,10 +20,10 @@ from service_tutorial.sim.description_formats import FORMATS
 CACHED_DESCRIPTIONS = 16
 
 
-def _mesh_stamps(paths):
-    """Return (path, modification time, size) of each mesh file, None for one that is gone."""
+def _file_stamps(description):
+    """Return (path, modification time, size) of each file a description read, None if one went."""
     stamps = []
-    for path in dict.fromkeys(paths):
+    for path in dict.fromkeys(description.mesh_files + description.source_files):
         try:
             status = os.stat(path)
         except OSError:
@@ -47,13 +48,13 @@ class DescriptionCache:
         key = (hashlib.sha256(data).digest(), isinstance(text, str),
                os.path.realpath(base_dir) if base_dir else None, model_format)
         kept = self._kept.pop(key, None)
-        if kept is not None and _mesh_stamps(kept[0].mesh_files) == kept[1]:
+        if kept is not None and _file_stamps(kept[0]) == kept[1]:
             self._kept[key] = kept
             return kept[0]
         description = FORMATS[model_format].load(
             text, base_dir=base_dir, package_resolver=self._package_resolver,
             timestep=self._timestep)
-        stamps = _mesh_stamps(description.mesh_files)
+        stamps = _file_stamps(description)
         if not description.missing_meshes and stamps is not None:
             self._kept[key] = (description, stamps)
             while len(self._kept) > self._size:

@@ -43,6 +43,25 @@ def matrix_quaternion(matrix):
     return quaternion
 
 
+def rpy_quaternion(rpy):
+    """Return the (w, x, y, z) quaternion of roll, pitch and yaw about fixed axes (URDF, SDF)."""
+    quaternion = np.zeros(4)
+    mujoco.mju_euler2Quat(quaternion, np.asarray(rpy, float), 'XYZ')
+    return quaternion
+
+
+def principal_inertia(orientation, tensor):
+    """
+    Return (principal moments, their axes' (w, x, y, z) quaternion) of an inertia tensor.
+
+    The tensor is given in a frame turned by orientation; the axes are in its parent.
+    """
+    moments, axes = np.linalg.eigh(rotate_tensor(orientation, tensor))
+    if np.linalg.det(axes) < 0.0:
+        axes[:, 2] = -axes[:, 2]
+    return moments, matrix_quaternion(axes)
+
+
 def rotate_tensor(quaternion, tensor):
     """Return a 3x3 tensor (an inertia) given in a frame turned by quaternion, in its parent."""
     rotation = np.zeros(9)

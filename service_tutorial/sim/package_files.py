@@ -20,12 +20,43 @@ class PackageFileError(ValueError):
     """A uri that names nothing a request may read; the message names the uri and why."""
 
 
+class PackageIndex:
+    """
+    The installed packages as the ROS side knows them: a package's share, and every share.
+
+    Called with a package's name it returns that package's share folder, as ament's
+    get_package_share_directory does (and raises as it does); shares() returns
+    {package: real share folder} of every installed package, for what looks in all of them
+    (an SDF model:// uri, in every package's models/ folder).
+    """
+
+    def __init__(self, share_of, shares):
+        """Answer with share_of(package) and shares(), the ROS side's two functions."""
+        self._share_of = share_of
+        self._shares = shares
+
+    def __call__(self, package):
+        """Return the share folder of an installed package."""
+        return self._share_of(package)
+
+    def shares(self):
+        """Return {package: real share folder} of every installed package."""
+        return self._shares()
+
+
+def installed_shares_of(package_resolver):
+    """Return {package: share} a package resolver lists; {} for one that only resolves."""
+    listing = getattr(package_resolver, 'shares', None)
+    return listing() if listing is not None else {}
+
+
 def confined_path(uri, package_share, *, folder=False, what='uri'):
     """
     Return the real path of the file (or folder) a uri names inside a package's share.
 
     package_share maps a package name to its share folder (ament's get_package_share_directory);
-    what names the uri in the messages.
+    folder: True for a folder, False for a file, None for either; what names the uri in the
+    messages.
     Raise PackageFileError if the uri is malformed, leaves the share or names nothing.
     """
     shown = quoted(uri)
@@ -54,8 +85,10 @@ def confined_path(uri, package_share, *, folder=False, what='uri'):
         raise PackageFileError(f'{what} {shown} leads outside the share folder of its package')
     if folder and not os.path.isdir(path):
         raise PackageFileError(f'{what} {shown} names no folder')
-    if not folder and not os.path.isfile(path):
+    if folder is False and not os.path.isfile(path):
         raise PackageFileError(f'{what} {shown} names no file')
+    if folder is None and not os.path.exists(path):
+        raise PackageFileError(f'{what} {shown} names no file or folder')
     return path
 
 

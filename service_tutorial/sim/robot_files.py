@@ -29,9 +29,8 @@ import xacro
 XACRO_EXTENSION = '.xacro'
 ALL_FORMATS = tuple(FORMATS)
 # Formats of other simulators, named in the refusal: by extension and by root element.
-OTHER_EXTENSIONS = {'.sdf': 'SDF', '.world': 'SDF', '.usd': 'USD', '.usda': 'USD',
-                    '.usdc': 'USD', '.usdz': 'USD'}
-OTHER_ROOTS = {'sdf': 'SDF'}
+OTHER_EXTENSIONS = {'.world': 'an SDF world, which LoadWorld loads', '.usd': 'USD',
+                    '.usda': 'USD', '.usdc': 'USD', '.usdz': 'USD'}
 _XACRO_TAG = '{' + XACRO_NAMESPACE + '}'
 # Texts told apart lately, kept: a fleet's or a lesson's robot is the same text again and
 # again. Only texts up to a size are kept, so that the kept ones never weigh much.
@@ -58,23 +57,39 @@ def read_uri(uri, package_share, *, formats=ALL_FORMATS):
     formats: the names of the formats the caller takes.
     """
     shown = f'uri {quoted(uri)}'
-    try:
-        path = confined_path(uri, package_share)
-    except PackageFileError as error:
-        raise WorldError(str(error), Reason.NO_RESOURCE) from None
+    scheme = uri.partition('://')[0]
+    owner = next((FORMATS[name] for name in formats if scheme in FORMATS[name].uri_schemes),
+                 None)
+    if owner is not None:
+        path = owner.locate(uri, package_share)
+    else:
+        try:
+            path = confined_path(uri, package_share, folder=None)
+        except PackageFileError as error:
+            raise WorldError(str(error), Reason.NO_RESOURCE) from None
+    if os.path.isdir(path):
+        path = _model_folder_file(path, shown, formats)
     _check_extension(path, shown, formats)
     return _read_file(path, shown, None, formats)
 
 
+def read_description_text(path, what):
+    """Return the text of a file a description names (an SDF include, a model.config)."""
+    return _read_bytes(path, f'{what} {quoted(path)}').decode('utf-8')
+
+
 def read_path(path, *, xacro_arguments=None, formats=ALL_FORMATS, what='robot file'):
     """
-    Return the RobotSource of a robot file the world's owner names by path, or refuse it.
+    Return the RobotSource of a robot file (or model folder) named by path, or refuse it.
 
     xacro_arguments: {name: value} for a xacro file (refused for any other); what: what the
     file is, for the refusal.
     """
     path = os.path.abspath(path)
-    return _read_file(path, f"{what} '{path}'", xacro_arguments, formats)
+    shown = f"{what} '{path}'"
+    if os.path.isdir(path):
+        path = _model_folder_file(path, shown, formats)
+    return _read_file(path, shown, xacro_arguments, formats)
 
 
 def read_text(text, what='resource_string', *, formats=ALL_FORMATS):
@@ -95,7 +110,7 @@ def is_xacro(path, text):
 def file_model_name(path):
     """Return the model name a robot file suggests: robot.urdf.xacro -> robot."""
     name = os.path.basename(path)
-    for extension in (XACRO_EXTENSION, '.urdf', '.mjcf', '.xml'):
+    for extension in (XACRO_EXTENSION, '.urdf', '.mjcf', '.xml', '.sdf'):
         name = name[:-len(extension)] if name.endswith(extension) else name
     return name
 
@@ -149,8 +164,19 @@ def _check_extension(path, shown, formats):
                          f'{_reads(formats)}', Reason.UNSUPPORTED_FORMAT)
 
 
-def _read_file(path, shown, xacro_arguments, formats):
-    """Return the RobotSource of a file, expanding a xacro file."""
+def _model_folder_file(folder, shown, formats):
+    """Return the model file of a model folder (SDF's, with a model.config), or refuse it."""
+    for name in formats:
+        finder = FORMATS[name].folder_file
+        path = finder(folder, read_description_text) if finder is not None else None
+        if path is not None:
+            return path
+    raise WorldError(f'{shown} names a folder that is no model folder (of '
+                     f'{_listed(formats)})', Reason.NO_RESOURCE)
+
+
+def _read_bytes(path, shown):
+    """Return the bytes of a file, with the byte limit; refuse one that cannot be read."""
     try:
         with open(path, 'rb') as robot_file:
             data = robot_file.read(MAX_MODEL_XML_BYTES + 1)
@@ -160,6 +186,12 @@ def _read_file(path, shown, xacro_arguments, formats):
     if len(data) > MAX_MODEL_XML_BYTES:
         raise WorldError(f'{shown} is larger than the limit of {MAX_MODEL_XML_BYTES} bytes',
                          Reason.NOT_PARSEABLE)
+    return data
+
+
+def _read_file(path, shown, xacro_arguments, formats):
+    """Return the RobotSource of a file, expanding a xacro file."""
+    data = _read_bytes(path, shown)
     try:
         text = data.decode('utf-8')
     except UnicodeDecodeError:
@@ -195,9 +227,6 @@ def _told(text, base_dir, what, formats, from_file):
     except UrdfError as error:
         raise WorldError(str(error), Reason.NOT_PARSEABLE) from None
     tag = root.tag if isinstance(root.tag, str) else ''
-    if tag in OTHER_ROOTS:
-        raise WorldError(f'{what} is {OTHER_ROOTS[tag]} (root element <{tag}>); '
-                         f'{_reads(formats)}', Reason.UNSUPPORTED_FORMAT)
     description_format = next((FORMATS[name] for name in FORMATS if FORMATS[name].root == tag),
                               None)
     if description_format is None:
@@ -214,12 +243,17 @@ def _told(text, base_dir, what, formats, from_file):
                          'xacro on it first, or name an installed .xacro file by its uri',
                          Reason.NOT_PARSEABLE)
     return RobotSource(text=text, model_format=description_format.name,
-                       robot_name=root.get(description_format.name_attribute) or '',
+                       robot_name=description_format.robot_name(root) or '',
                        base_dir=base_dir)
 
 
 def _reads(formats):
     """Say which formats are taken, for a refusal."""
     if formats == ALL_FORMATS:
-        return f'this world spawns {" and ".join(formats)}'
-    return f'here only {" and ".join(formats)} is taken'
+        return f'this world spawns {_listed(formats)}'
+    return f'here only {_listed(formats)} is taken'
+
+
+def _listed(names):
+    """Return names as 'a', 'a and b' or 'a, b and c'."""
+    return ' and '.join(filter(None, (', '.join(names[:-1]), names[-1])))

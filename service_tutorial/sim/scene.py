@@ -6,6 +6,8 @@ import functools
 import mujoco
 from service_tutorial.sim.urdf.builder import CONTACT_TIME_CONSTANT
 
+EARTH_GRAVITY = (0.0, 0.0, -9.81)  # m/s^2, a world's unless its file says otherwise
+
 # The ground's grid and the sky, as MuJoCo's builtin textures draw them.
 _TEXTURES = (
     {'name': 'ground_grid', 'type': mujoco.mjtTexture.mjTEXTURE_2D,
@@ -66,7 +68,11 @@ class Scene:
 
 
 def make_scene(timestep, gravity, scenery=None):
-    """Return the spec of a world without models: physics options, ground, sky, sun, scenery."""
+    """
+    Return the spec of a world without models: physics options, ground, sky, sun, scenery.
+
+    A scenery with a ground of its own (an SDF world's) takes the place of the plane.
+    """
     spec = mujoco.MjSpec()
     spec.modelname = 'service_tutorial'
     # Attaching copies the robot: its description stays as loaded, and deleting the robot
@@ -88,11 +94,12 @@ def make_scene(timestep, gravity, scenery=None):
     # went unstable, see recovery.py.
     option.disableflags |= mujoco.mjtDisableBit.mjDSBL_AUTORESET
     _add_textures(spec)
-    # A plane collides everywhere; its size only sets how far the floor is drawn.
-    spec.worldbody.add_geom(
-        name='ground_plane', type=mujoco.mjtGeom.mjGEOM_PLANE, size=[25.0, 25.0, 0.05],
-        material='ground_grid', friction=[1.0, 0.005, 0.0001],
-        solref=[CONTACT_TIME_CONSTANT, 1.0])
+    if scenery is None or not scenery.own_ground:
+        # A plane collides everywhere; its size only sets how far the floor is drawn.
+        spec.worldbody.add_geom(
+            name='ground_plane', type=mujoco.mjtGeom.mjGEOM_PLANE, size=[25.0, 25.0, 0.05],
+            material='ground_grid', friction=[1.0, 0.005, 0.0001],
+            solref=[CONTACT_TIME_CONSTANT, 1.0])
     spec.worldbody.add_light(
         name='sun', type=mujoco.mjtLightType.mjLIGHT_DIRECTIONAL, pos=[0.0, 0.0, 10.0],
         dir=[0.3, 0.2, -1.0], diffuse=[0.7, 0.7, 0.7], specular=[0.2, 0.2, 0.2],

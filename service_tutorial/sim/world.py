@@ -48,6 +48,14 @@ def _route_mujoco_messages():
     config.set()
 
 
+def _physics(timestep, gravity):
+    """Return a world's timestep and gravity, checked."""
+    timestep = validation.finite_number(timestep, 'timestep')
+    if timestep <= 0.0:
+        raise WorldError(f'timestep must be positive: {timestep}')
+    return timestep, validation.vector(gravity, 3, 'gravity')
+
+
 class World:
     """
     A MuJoCo world with a ground plane into which robots are spawned and deleted.
@@ -56,7 +64,7 @@ class World:
     body_state() are there for the core's own pieces, recovery and plugins; nodes use the rest.
     """
 
-    def __init__(self, *, timestep=0.002, gravity=(0.0, 0.0, -9.81), cmd_vel_timeout=0.5,
+    def __init__(self, *, timestep=0.002, gravity=scene.EARTH_GRAVITY, cmd_vel_timeout=0.5,
                  package_resolver=None, scenery=None, background_rendering=False, logger=None):
         """
         Create a world without models, with the static obstacles of a scenery file if given.
@@ -65,10 +73,7 @@ class World:
         package:// meshes (none: refused); background_rendering draws cameras on a thread;
         logger: where the world says what happens to its models (core_logger(WORLD_LOG)).
         """
-        timestep = validation.finite_number(timestep, 'timestep')
-        if timestep <= 0.0:
-            raise WorldError(f'timestep must be positive: {timestep}')
-        gravity = validation.vector(gravity, 3, 'gravity')
+        timestep, gravity = _physics(timestep, gravity)
         cmd_vel_timeout = validation.non_negative_number(cmd_vel_timeout, 'cmd_vel_timeout')
         _route_mujoco_messages()
         self._logger = logger or core_logger(WORLD_LOG)
@@ -76,6 +81,7 @@ class World:
         self._cmd_vel_timeout = cmd_vel_timeout
         self._paused = False
         self._models = {}
+        self._package_resolver = package_resolver
         self._descriptions = DescriptionCache(package_resolver, timestep)
         self._next_event = math.inf
         self._kinematics_fresh = False
@@ -208,9 +214,15 @@ class World:
         self.forward()
         self._logger.info("deleted model '%s'", name)
 
-    def load(self, scenery):
-        """Take a new scenery (a Scenery or None) with no models, at time 0."""
-        self._scene = dataclasses.replace(self._scene, scenery=scenery)
+    def load(self, scenery, *, timestep=None, gravity=None):
+        """Take a new scenery (a Scenery or None) with no models, at time 0, and new physics."""
+        timestep, gravity = _physics(self._timestep if timestep is None else timestep,
+                                     self._scene.gravity if gravity is None else gravity)
+        if timestep != self._timestep:  # robots are built for their world's timestep
+            self._timestep = timestep
+            self._descriptions = DescriptionCache(self._package_resolver, timestep)
+        self._scene = dataclasses.replace(self._scene, scenery=scenery, timestep=timestep,
+                                          gravity=tuple(gravity))
         self.rebuild({})
         self._reset(keep_time=False)
 

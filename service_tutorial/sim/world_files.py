@@ -22,6 +22,12 @@ only by uri. No scenery is the bare plane. A model stands at a named pose of the
 in URDF; bounds are a box (two opposite corners) or a sphere (centre and radius) in the world
 frame, where something may stand at the pose. Elements the world does not know are listed in
 WorldFile.unsupported, for the loader to refuse or to ignore.
+
+A Gazebo world, SDF (<sdf><world>, a .world or .sdf file, or an installed .sdf.xacro expanded with
+its default arguments), is a world file too (sdf/world.py): its static models are its scenery, its
+other models its start-up models, each from its own SDF; its <physics> and <gravity> are the
+world's; what it holds and the world does not simulate is listed in WorldFile.unsupported, and the
+models left out in WorldFile.left_out.
 """
 
 from dataclasses import dataclass, field
@@ -31,6 +37,9 @@ import mujoco
 import numpy as np
 from service_tutorial.sim.description import parse_numbers, UrdfError
 from service_tutorial.sim.package_files import confined_path, PackageFileError, within
+from service_tutorial.sim.robot_files import expand_xacro, read_description_text, RobotSource
+from service_tutorial.sim.sdf.reader import parse_sdf
+from service_tutorial.sim.sdf.world import read_sdf_world, TAG as SDF_TAG, world_name
 from service_tutorial.sim.urdf.hardened_xml import MAX_MODEL_XML_BYTES, parse_xml
 from service_tutorial.sim.validation import check_model_name, quoted, Reason, WorldError
 
@@ -41,9 +50,13 @@ MAX_TEXT_LENGTH = 10000  # a description
 MAX_NAME_LENGTH = 256  # a world's, a pose's or a tag's
 MAX_COORDINATE = 1e6  # metres
 WORLD_FILE_SUFFIX = '.world.xml'
+# Gazebo's worlds, SDF, are found in a worlds/ folder by these too; xacro is expanded.
+SDF_XACRO_SUFFIX = '.sdf.xacro'
+SDF_WORLD_SUFFIXES = ('.world', '.sdf', SDF_XACRO_SUFFIX)
+WORLD_SUFFIXES = (WORLD_FILE_SUFFIX,) + SDF_WORLD_SUFFIXES
 # Scenery files load as worlds of their own; other simulators' formats are named.
 SCENERY_ROOTS = ('robot', 'mujoco')
-OTHER_FORMATS = {'sdf': 'SDF', 'gazebo': 'SDF'}
+OTHER_FORMATS = {'gazebo': "Gazebo Classic's <gazebo> (write it as SDF, <sdf>)"}
 
 
 class WorldFileError(WorldError):
@@ -67,13 +80,14 @@ class NamedPose:
 
 @dataclass(frozen=True)
 class StartModel:
-    """A model the world spawns when it loads: its file, name, namespace and pose."""
+    """A model the world spawns when it loads: its file (or its text), name, namespace, pose."""
 
     name: str  # '' for the name inside the file
-    path: str
+    path: str  # '' for a model whose text the world file holds (source)
     namespace: str
     position: tuple
     orientation: tuple  # (w, x, y, z)
+    source: object = None  # a robot_files.RobotSource: an SDF world's model
 
 
 @dataclass(frozen=True)
@@ -88,31 +102,43 @@ class WorldFile:
     named_poses: dict = field(default_factory=dict)  # name -> NamedPose, in file order
     unsupported: tuple = ()  # elements the world does not know, as '<tag>'
     scenery_text: str = ''  # a scenery given as text, in place of a file
+    physics: tuple = None  # (timestep, gravity) the world says, None for the node's own
+    sdf_world: object = None  # an SDF world read (sdf/world.py): its static models
+    left_out: tuple = ()  # names of models left out: none of their collisions is there
 
 
-def read_world_file(path, package_share, *, shown=None, scenery_alone=False):
+def read_world_file(path, package_share, *, shown=None, scenery_alone=False, listing=False):
     """
     Return the WorldFile of a file (checked against the roots by its caller).
 
-    scenery_alone: a URDF or MJCF file is a world of that scenery and nothing else.
+    scenery_alone: a URDF or MJCF file is a world of that scenery and nothing else; listing:
+    an SDF world's name is all that is read, for a list of worlds.
     """
     shown = quoted(shown or path)
-    limit = MAX_MODEL_XML_BYTES if scenery_alone else MAX_WORLD_FILE_BYTES
-    try:
-        with open(path, 'rb') as world_file:
-            data = world_file.read(limit + 1)
-    except OSError as error:
-        raise WorldFileError(f'world file {shown} cannot be read: {error.strerror}',
-                             Reason.NO_RESOURCE) from None
+    limit = MAX_MODEL_XML_BYTES if scenery_alone or path.endswith(SDF_WORLD_SUFFIXES) \
+        else MAX_WORLD_FILE_BYTES
+    if path.endswith(SDF_XACRO_SUFFIX):  # with its default arguments, as a launch file would
+        try:
+            data = expand_xacro(path).encode('utf-8')
+        except WorldError as error:
+            raise WorldFileError(str(error), error.reason) from None
+    else:
+        try:
+            with open(path, 'rb') as world_file:
+                data = world_file.read(limit + 1)
+        except OSError as error:
+            raise WorldFileError(f'world file {shown} cannot be read: {error.strerror}',
+                                 Reason.NO_RESOURCE) from None
     name = os.path.basename(path)
-    default_name = name[:-len(WORLD_FILE_SUFFIX)] if name.endswith(WORLD_FILE_SUFFIX) else \
-        os.path.splitext(name)[0]
+    default_name = next((name[:-len(suffix)] for suffix in (WORLD_FILE_SUFFIX, SDF_XACRO_SUFFIX)
+                         if name.endswith(suffix)), os.path.splitext(name)[0])
     return parse_world(data, f'world file {shown}', os.path.dirname(path), package_share,
-                       default_name=default_name, scenery_path=path if scenery_alone else None)
+                       default_name=default_name, scenery_path=path if scenery_alone else None,
+                       listing=listing)
 
 
 def parse_world(data, what, base_dir, package_share, *, default_name='world',
-                scenery_path=None, scenery_alone=False):
+                scenery_path=None, scenery_alone=False, listing=False):
     """
     Return the WorldFile of a world's XML (bytes); base_dir None: it names files by uri.
 
@@ -122,7 +148,8 @@ def parse_world(data, what, base_dir, package_share, *, default_name='world',
     if isinstance(data, str):
         data = data.encode('utf-8')
     alone = scenery_alone or scenery_path is not None
-    limit = MAX_MODEL_XML_BYTES if alone else MAX_WORLD_FILE_BYTES
+    limit = MAX_MODEL_XML_BYTES if alone or data.lstrip()[:200].find(b'<sdf') >= 0 \
+        else MAX_WORLD_FILE_BYTES
     if len(data) > limit:
         raise WorldFileError(f'{what} is larger than {limit} bytes')
     try:
@@ -136,9 +163,11 @@ def parse_world(data, what, base_dir, package_share, *, default_name='world',
                          else 'a scenery given as text', tags=(),
                          scenery=scenery_path or '', models=(),
                          scenery_text='' if scenery_path else data.decode('utf-8'))
+    if tag == 'sdf':
+        return _sdf_world(data, what, base_dir, package_share, listing)
     if tag in OTHER_FORMATS:
         raise WorldFileError(f'{what} is {OTHER_FORMATS[tag]} (root element <{tag}>); this '
-                             'world loads world files (<world>), URDF and MJCF',
+                             'world loads world files (<world>), SDF, URDF and MJCF',
                              Reason.UNSUPPORTED_FORMAT)
     if len(data) > MAX_WORLD_FILE_BYTES:
         raise WorldFileError(f'{what} is larger than {MAX_WORLD_FILE_BYTES} bytes')
@@ -147,6 +176,32 @@ def parse_world(data, what, base_dir, package_share, *, default_name='world',
         return reader.world(root, default_name)
     except UrdfError as error:  # parse_numbers' refusals
         raise WorldFileError(f'{what}: {error}') from None
+
+
+def _sdf_world(data, what, base_dir, package_share, listing):
+    """Return the WorldFile of an SDF world; listing: its name alone is read."""
+    try:
+        if listing:
+            root, version = parse_sdf(data, what)
+            return WorldFile(name=world_name(root, what), description=_sdf_description(version),
+                             tags=(SDF_TAG,), scenery='', models=())
+        world = read_sdf_world(data, what, base_dir, package_share, read_description_text)
+    except WorldError as error:
+        raise WorldFileError(str(error), error.reason) from None
+    models = tuple(StartModel(name=entity.name, path='', namespace='', position=entity.position,
+                              orientation=entity.orientation,
+                              source=RobotSource(entity.text, 'sdf', entity.name,
+                                                 entity.base_dir))
+                   for entity in world.entities)
+    return WorldFile(name=world.name, description=_sdf_description(world.version),
+                     tags=(SDF_TAG,),
+                     scenery='', models=models, unsupported=world.not_simulated,
+                     physics=(world.timestep, world.gravity), sdf_world=world,
+                     left_out=world.left_out)
+
+
+def _sdf_description(version):
+    return f'a Gazebo world (SDF {version[0]}.{version[1]})'
 
 
 class _Reader:

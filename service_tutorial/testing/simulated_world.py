@@ -108,7 +108,6 @@ class SimulatedWorld:
                 context=self.context, namespace=self.namespace,
                 parameter_overrides=[Parameter(name, value=value) for name, value in
                                      {'paused': True, **parameters}.items()]))
-            self.timestep = self.world_node.get_parameter('timestep').value
             self.node = self._spin(Node('simulation_test_client', context=self.context))
             self._clock_sub = self.node.create_subscription(
                 Clock, '/clock', self._clock_callback, CLOCK_QOS)
@@ -124,6 +123,11 @@ class SimulatedWorld:
     def domain_id(self):
         """Return the ROS domain id of this world's graph."""
         return self._claim.domain_id
+
+    @property
+    def timestep(self):
+        """Return the physics step of the world loaded, in s (an SDF world may have its own)."""
+        return self.world_node.world.timestep
 
     @property
     def time(self):

@@ -120,6 +120,7 @@ class MujocoWorld(Node):
         """Make the world, its services and topics, and the start-up models."""
         # Imported here, after the parameters passed their checks: a bad one ends the program
         # before the simulation's imports (yourdfpy and trimesh take over a second).
+        from service_tutorial.sim.scene import EARTH_GRAVITY
         from service_tutorial.sim.world import World
         from service_tutorial.world_node.standard.entities import EntityServices
         from service_tutorial.world_node.standard.named_poses import NamedPoseServices
@@ -128,7 +129,8 @@ class MujocoWorld(Node):
         from service_tutorial.world_node.world_loader import WorldLoader
         self.world_loader = WorldLoader(self, package_share)
         start_up = self.world_loader.start_up_world(parameters, default_parameters())
-        self.world = World(timestep=parameters['timestep'],
+        self.world = World(timestep=start_up.timestep if start_up else parameters['timestep'],
+                           gravity=start_up.gravity if start_up else EARTH_GRAVITY,
                            cmd_vel_timeout=parameters['cmd_vel_timeout'],
                            package_resolver=package_share,
                            scenery=start_up and start_up.scenery,
@@ -382,6 +384,7 @@ class MujocoWorld(Node):
 
     def after_reset(self):
         """Start the streams again from the world's time after a reset, and publish it."""
+        self.pacer.timestep = self.world.timestep  # a world loaded may have its own
         self.pacer.anchor(self.world.time)
         self.pacer.restart(self.world.time, (ODOMETRY_STREAM, JOINT_STATES_STREAM))
         self.publish_clock()

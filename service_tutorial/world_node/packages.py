@@ -4,13 +4,9 @@ import os
 
 from ament_index_python.packages import get_package_share_directory
 from ament_index_python.packages import get_packages_with_prefixes
+from service_tutorial.sim.package_files import PackageIndex
 
 PACKAGE = 'service_tutorial'
-
-
-def package_share(package):
-    """Return the share folder of an installed package, or raise as the ament index does."""
-    return get_package_share_directory(package)
 
 
 def installed_shares():
@@ -21,6 +17,11 @@ def installed_shares():
         if _valid_package(package) and os.path.isdir(share):
             shares[package] = os.path.realpath(share)
     return shares
+
+
+# Called with a package's name, its share folder (or it raises as the ament index does); its
+# shares() lists every installed package, for SDF's model:// in their models/ folders.
+package_share = PackageIndex(get_package_share_directory, installed_shares)
 
 
 def own_share():

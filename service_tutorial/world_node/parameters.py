@@ -193,8 +193,9 @@ WORLD_PARAMETERS = (
         minimum=0.0),
     ParameterSpec(
         'world', 'yard',
-        "The world loaded at start-up: a world's name (a worlds/<name>.world.xml of this or "
-        'any installed package), a package:// uri or an absolute path of a world file',
+        "The world loaded at start-up: a world's name (a worlds/<name>.world.xml, or Gazebo's "
+        '<name>.world, <name>.sdf or <name>.sdf.xacro, of this or any installed package), a '
+        'package:// uri or an absolute path of a world file',
         read_only=True),
     ParameterSpec(
         'models', ['tinybot.urdf'],

@@ -2,13 +2,15 @@
 Which world the node serves: its scenery, start-up models and named poses, and loading another.
 
 A world comes from a world file (sim/world_files.py): this package's worlds/ and every installed
-package's worlds/ hold them, found by name. Loading one is all or nothing: the new scenery, its
-models and their files are read and tried in a trial world first (World.trial), and only
-if all of them hold does the node remove every entity with its topics, load the scenery and
-spawn the world's models. A load that fails leaves the world the node had exactly as it was.
-A scenery is read once while its file is unchanged, and the same scenery with the same spawn
-orders is tried once: loading a world again costs little more than building it.
-Unloading leaves the no-world state: no entities, nothing steps or spawns until a load.
+package's worlds/ hold them, found by name (<name>.world.xml, or Gazebo's <name>.world and
+<name>.sdf). A world whose file says its physics (an SDF world's <physics> and <gravity>) runs with
+them; any other with the node's timestep parameter and the Earth's gravity. Loading one is all or
+nothing: the new scenery, its models and their files are read and tried in a trial world first
+(World.trial), and only if all of them hold does the node remove every entity with its topics, load
+the scenery and spawn the world's models. A load that fails leaves the world the node had exactly
+as it was. A scenery is read once while its file is unchanged, and the same scenery with the same
+spawn orders is tried once: loading a world again costs little more than building it. Unloading
+leaves the no-world state: no entities, nothing steps or spawns until a load.
 """
 
 from dataclasses import dataclass, replace
@@ -20,12 +22,13 @@ from service_tutorial.sim import frames
 from service_tutorial.sim.core_logs import core_logger
 from service_tutorial.sim.package_files import confined_path, PackageFileError
 from service_tutorial.sim.robot_files import file_model_name, read_path
+from service_tutorial.sim.scene import EARTH_GRAVITY
 from service_tutorial.sim.scenery import Scenery, SceneryError
 from service_tutorial.sim.spawning import SpawnOrder
 from service_tutorial.sim.validation import quoted, Reason, WorldError
 from service_tutorial.sim.world import World, WORLD_LOG
 from service_tutorial.sim.world_files import read_world_file, StartModel
-from service_tutorial.sim.world_files import WORLD_FILE_SUFFIX, WorldFileError
+from service_tutorial.sim.world_files import WORLD_SUFFIXES, WorldFileError
 from service_tutorial.world_node.packages import installed_shares, own_share, PACKAGE
 from service_tutorial.world_node.parameters import ParameterError
 from service_tutorial.world_node.ros_names import normalise_namespace
@@ -77,6 +80,12 @@ class PreparedWorld:
     scenery: object  # a Scenery, or None for the bare plane
     orders: tuple  # SpawnOrders of its models
     namespaces: tuple
+    timestep: float  # s
+    gravity: tuple  # m/s^2
+
+    def left_out(self):
+        """Return what the world leaves out: (meshes not found, models with nothing to collide)."""
+        return (self.scenery.missing_meshes if self.scenery else ()), self.loaded.world.left_out
 
 
 class WorldLoader:
@@ -106,16 +115,15 @@ class WorldLoader:
 
     def find(self, name):
         """Return the path of a world file by name: this package's worlds/ first, then any."""
-        own = os.path.join(self.package_share(PACKAGE), WORLDS_FOLDER, name + WORLD_FILE_SUFFIX)
         if '/' in name or name in ('.', '..'):
             raise WorldFileError(f'{quoted(name)} is no world name: give a name, a package:// '
                                  'uri or an absolute path', Reason.NO_RESOURCE)
-        if os.path.isfile(own):
-            return own
-        for share in installed_shares().values():
-            path = os.path.join(share, WORLDS_FOLDER, name + WORLD_FILE_SUFFIX)
-            if os.path.isfile(path):
-                return path
+        shares = [self.package_share(PACKAGE)] + list(installed_shares().values())
+        for share in shares:
+            for suffix in WORLD_SUFFIXES:
+                path = os.path.join(share, WORLDS_FOLDER, name + suffix)
+                if os.path.isfile(path):
+                    return path
         raise WorldFileError(f'no world named {quoted(name)} in the worlds/ folder of any '
                              'installed package', Reason.NO_RESOURCE)
 
@@ -123,8 +131,8 @@ class WorldLoader:
         """
         Return the PreparedWorld the node starts with: the `world` parameter's file.
 
-        '' is the no-world state (None). scenery and the models parameters, set to other than
-        their defaults, replace what the file says. A world that cannot be read is a bad
+        '' is the no-world state (None). scenery, the models parameters and timestep, set to
+        other than their defaults, replace what the file says. A world that cannot be read is a bad
         parameter: ParameterError.
         """
         try:
@@ -155,9 +163,13 @@ class WorldLoader:
                 f'{WORLDS_FOLDER}/{os.path.basename(path)}'
         world = read_world_file(path, self.package_share)
         replaced = []
+        if world.physics and parameters['timestep'] != defaults['timestep']:
+            world = replace(world, physics=(parameters['timestep'], world.physics[1]))
+            replaced.append('timestep')
         if parameters[SCENERY_PARAMETER] != defaults[SCENERY_PARAMETER]:
             scenery = parameters[SCENERY_PARAMETER]
-            world = replace(world, scenery=resolve_model_path(scenery) if scenery else '')
+            world = replace(world, scenery=resolve_model_path(scenery) if scenery else '',
+                            sdf_world=None)
             replaced.append('scenery')
         if any(parameters[name] != tuple(defaults[name]) for name in MODEL_PARAMETERS):
             world = replace(world, models=tuple(
@@ -179,7 +191,10 @@ class WorldLoader:
         """
         world = loaded.world
         scenery = None
-        if world.scenery_text:
+        if world.sdf_world is not None:
+            scenery = Scenery.from_sdf(world.sdf_world, f'world {quoted(world.name)}',
+                                       package_resolver=self.package_share)
+        elif world.scenery_text:
             scenery = Scenery.from_text(world.scenery_text, 'resource_string',
                                         package_resolver=self.package_share)
         elif world.scenery:
@@ -187,7 +202,7 @@ class WorldLoader:
         orders, namespaces = [], []
         for model in world.models:
             try:
-                robot = read_path(model.path)
+                robot = model.source or read_path(model.path)
                 namespaces.append(normalise_namespace(model.namespace))
             except WorldError as error:  # a file the world names and cannot have is an asset
                 raise WorldFileError(str(error), Reason.MISSING_ASSET
@@ -196,10 +211,12 @@ class WorldLoader:
             orders.append(SpawnOrder.of(model.name or file_model_name(model.path), robot,
                                         position=model.position,
                                         orientation=model.orientation))
-        tried = (scenery, tuple(orders))  # the same files and poses spawn the same way
+        timestep, gravity = world.physics or (self.node.parameters['timestep'], EARTH_GRAVITY)
+        # The same files and poses spawn the same way in the same physics.
+        tried = (scenery, tuple(orders), timestep, tuple(gravity))
         if trial and tried not in self._tried:
             refused = [(order.name, outcome) for order, outcome
-                       in zip(orders, self._trial(scenery, orders))
+                       in zip(orders, self._trial(scenery, orders, timestep, gravity))
                        if isinstance(outcome, WorldError)]
             if refused:
                 name, error = refused[0]
@@ -207,7 +224,8 @@ class WorldLoader:
                                      f'{quoted(name)}: {error}', Reason.MODEL_REFUSED)
             self._tried = (self._tried | {tried}) if len(self._tried) < KEPT_SCENERIES \
                 else {tried}
-        return PreparedWorld(loaded, scenery, tuple(orders), tuple(namespaces))
+        return PreparedWorld(loaded, scenery, tuple(orders), tuple(namespaces), timestep,
+                             tuple(gravity))
 
     def _scenery(self, path):
         """Return the Scenery of a file, read again only when the file changed."""
@@ -225,20 +243,21 @@ class WorldLoader:
             del self._sceneries[next(iter(self._sceneries))]
         return kept[2]
 
-    def _trial(self, scenery, orders):
+    def _trial(self, scenery, orders, timestep, gravity):
         """Return what spawning orders into a world with scenery gives, said quietly."""
         if self._trial_world is None:  # kept: it builds each robot file once
             trial_log = core_logger(TRIAL_LOG)
             trial_log.setLevel(logging.WARNING)
-            self._trial_world = World(timestep=self.node.parameters['timestep'],
-                                      package_resolver=self.package_share, logger=trial_log)
-        self._trial_world.load(scenery)
+            self._trial_world = World(timestep=timestep, package_resolver=self.package_share,
+                                      logger=trial_log)
+        self._trial_world.load(scenery, timestep=timestep, gravity=gravity)
         return self._trial_world.spawn(orders)
 
     def load(self, prepared):
         """Replace the world: every entity goes, the prepared scenery and models come."""
         self._clear()
-        self.node.world.load(prepared.scenery)
+        self.node.world.load(prepared.scenery, timestep=prepared.timestep,
+                             gravity=prepared.gravity)
         self.node.viewer.reopen()
         self.populate(prepared)
         self._pause()
@@ -258,7 +277,8 @@ class WorldLoader:
     def unload(self):
         """Enter the no-world state: every entity and the scenery go; nothing steps."""
         self._clear()
-        self.node.world.load(None)
+        self.node.world.load(None, timestep=self.node.parameters['timestep'],
+                             gravity=EARTH_GRAVITY)
         self.node.viewer.reopen()
         self.current = None
         self.start_up_models = frozenset()

@@ -28,18 +28,22 @@ EXPECTED_ROWS = {
     'turning': len(QUICK.durations) * len(QUICK.velocities),
     'targets': (1 + 2 * len(QUICK.growth_counts) + 6 * len(QUICK.cost_counts) + 1
                 + 2 * len(QUICK.robot_counts)
-                + (report.CPU_TARGET_ROBOTS in QUICK.robot_counts) + 1 + 1 + 4 + 2 + 3),
+                + (report.CPU_TARGET_ROBOTS in QUICK.robot_counts) + 1 + 1 + 4 + 3 + 3
+                + len(QUICK.cost_counts)),
     'core': 2,
     # cold spawn, warm spawn and delete of two robots per world size, and the box sequence
     'spawn_cost': 6 * len(QUICK.cost_counts) + 1,
+    # a cold spawn of R2-D2 from SDF against the same from URDF, per world size
+    'sdf_spawn': len(QUICK.cost_counts),
     'camera': 1,
     'sensors': 5,
     'answers': 3,
     # SpawnEntities against MuJoCo's batch and against single spawns, StepSimulation, states
     # from a C client, and (no limit) from rclpy's client
     'standard_interfaces': 5,
-    # LoadWorld of the parking world and of the yard, each against the core's build of it
-    'world_loading': 2,
+    # LoadWorld of the parking world, the yard and the yard in SDF, each against the core's
+    # build of it
+    'world_loading': 3,
     # the web page: no browser against web:=false, free-running and in real time; one browser
     'web': 3,
 }

@@ -2,7 +2,7 @@
 One way in: one module opens robot files, one lists the installed packages.
 
 Every file the package opens is opened by a module that says here what it opens; robot files
-(URDF, xacro, MJCF) only by the reader, sim/robot_files.py, and nothing hands a path to
+(URDF, xacro, MJCF, SDF) only by the reader, sim/robot_files.py, and nothing hands a path to
 xacro or MuJoCo to open for it elsewhere. The installed packages are listed by
 world_node/packages.py alone. Each rule has a self-test that shows it catches a module that
 breaks it.
@@ -16,7 +16,7 @@ from repository import ROOT
 PACKAGE = os.path.join(ROOT, 'service_tutorial')
 # Every module that opens files, and what it opens.
 OPENERS = {
-    'sim/robot_files.py': 'robot files: URDF, xacro and MJCF',
+    'sim/robot_files.py': 'robot files: URDF, xacro, MJCF, SDF and model.config',
     'sim/world_files.py': 'world files',
     'sim/urdf/meshes.py': 'the mesh files a robot names',
     'sim/background_renders.py': 'the names of its threads, in /proc',

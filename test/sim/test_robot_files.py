@@ -62,7 +62,8 @@ def test_a_file_suggests_its_model_name_without_urdf_and_xacro_extensions():
     assert file_model_name('/a/tinybot.urdf') == 'tinybot'
     assert file_model_name('robot.urdf.xacro') == 'robot'
     assert file_model_name('tinybot_diff.xacro') == 'tinybot_diff'
-    assert file_model_name('arm.sdf') == 'arm.sdf'
+    assert file_model_name('arm.sdf') == 'arm'
+    assert file_model_name('arm.usd') == 'arm.usd'
 
 
 def test_arguments_are_name_colon_equals_value():

@@ -53,7 +53,8 @@ def test_the_parking_spot_lies_in_front_of_the_crate_and_inside_its_bounds():
 
 
 @pytest.mark.parametrize('text, kind, named', [
-    ('<sdf/>', FORMAT, '<sdf>'),
+    ('<gazebo/>', FORMAT, '<gazebo>'),
+    ('<sdf/>', PARSE, "version '', not X.Y"),
     ('<world name=" "/>', PARSE, 'world name'),
     ('<world><named_pose name="a"/><named_pose name="a"/></world>', PARSE, 'twice'),
     ('<world><model uri="package://service_tutorial/models/tinybot.urdf" pose="b"/></world>',

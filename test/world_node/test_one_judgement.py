@@ -22,7 +22,6 @@ from standard_entities import snapshot, spawn, spawn_or_fail, stamped
 pytestmark = pytest.mark.ros
 
 CRATE = read_file(MJCF_CRATE)
-SDF = '<sdf version="1.9"><model name="m"><link name="l"/></model></sdf>'
 TOO_HEAVY = ('<robot name="heavy"><link name="a"><inertial><mass value="1"/><inertia ixx="1" '
              'iyy="1" izz="3" ixy="0" ixz="0" iyz="0"/></inertial></link></robot>')
 
@@ -85,7 +84,6 @@ BAD_REQUESTS = [
     ('a zero quaternion', {'quaternion': (0.0, 0.0, 0.0, 0.0)}, SpawnResult.INVALID_POSE),
     ('XML that does not parse', {'text': '<robot name="b"><link'},
      SpawnResult.RESOURCE_PARSE_ERROR),
-    ('SDF', {'text': SDF}, SpawnResult.UNSUPPORTED_FORMAT),
     ('a robot MuJoCo does not compile', {'text': TOO_HEAVY}, SpawnResult.RESOURCE_PARSE_ERROR),
 ]
 

@@ -117,7 +117,7 @@ def test_what_is_no_robot_is_left_out_with_the_reason(share):
         'badmacro.urdf.xacro': ('<robot name="x" xmlns:xacro="http://www.ros.org/wiki/xacro">'
                                 '<xacro:nothing/></robot>', 'xacro cannot expand'),
         'latin1.urdf': (None, 'is not UTF-8 text'),
-        'sdf.urdf': ('<sdf version="1.9"/>', 'is SDF (root element <sdf>)'),
+        'sdf.urdf': ('<sdf version="1.9"/>', 'SDF must hold one <model> to spawn'),
         'massless.urdf': ('<robot name="m"><link name="body"><collision><geometry><box '
                           'size="1 1 1"/></geometry></collision></link></robot>',
                           'it does not compile: Error: mass and inertia of moving bodies'),

@@ -108,13 +108,15 @@ SPAWN_REFUSALS = [
      'SpawnEntity: model name must not be empty'),
     ({'name': 'x' * 300, 'resource_string': CRATE}, SpawnResult.NAME_INVALID,
      'characters) is longer than 64 characters'),
-    ({'resource_string': '<sdf version="1.9"><model name="m"/></sdf>'},
+    ({'name': 'w', 'resource_string': '<sdf version="1.9"><world name="w"/></sdf>'},
      SpawnResult.UNSUPPORTED_FORMAT,
-     'SpawnEntity: resource_string is SDF (root element <sdf>); this world spawns urdf and '
-     'mjcf'),
+     'SpawnEntity: SDF holds a <world>, not a model to spawn: load it as a world (LoadWorld)'),
+    ({'resource_string': '<sdf version="1.9"><model name="m"/></sdf>'},
+     SpawnResult.RESOURCE_PARSE_ERROR,
+     "SpawnEntity: model 'm' has no link; a model has at least one"),
     ({'uri': 'package://service_tutorial/package.xml'}, SpawnResult.UNSUPPORTED_FORMAT,
-     "SpawnEntity: uri 'package://service_tutorial/package.xml' is neither URDF nor MJCF: "
-     'root element is <package>'),
+     "SpawnEntity: uri 'package://service_tutorial/package.xml' is neither URDF nor MJCF nor "
+     'SDF: root element is <package>'),
     ({}, SpawnResult.NO_RESOURCE, 'SpawnEntity: neither uri nor resource_string is given'),
     ({'uri': 'http://example.com/r2d2.urdf'}, SpawnResult.NO_RESOURCE,
      "SpawnEntity: uri 'http://example.com/r2d2.urdf' is neither package://<package>/<path> "

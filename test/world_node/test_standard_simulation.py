@@ -123,7 +123,7 @@ def test_all_32_features_are_claimed(fast_world):
              if name.isupper() and isinstance(value, int)}
     assert len(every) == 32
     assert list(features.features) == sorted(every)
-    assert list(features.spawn_formats) == ['urdf', 'mjcf']
+    assert list(features.spawn_formats) == ['urdf', 'mjcf', 'sdf']
     assert 'MuJoCo' in features.custom_info
 
 

@@ -63,6 +63,7 @@ class RobotDescription:
     missing_meshes: tuple = ()  # mesh filenames as written that could not be had, left out
     ignored_plugins: tuple = ()  # <plugin> filenames of kinds not simulated here
     notes: tuple = ()  # what a user should know about how the robot was built, one line each
+    source_files: tuple = ()  # the files besides its own it was read from (SDF's includes)
 
     def plugin_config(self, kind):
         """Return the configuration of the robot's first plugin of a kind, or None."""
@@ -129,6 +130,46 @@ def _missing_meshes(root, missing):
         reasons.setdefault(filename, reason)
     written = _unique(mesh.get('filename') for mesh in root.iter('mesh'))
     return [(filename, reasons[filename]) for filename in written if filename in reasons]
+
+
+def keep_links_apart(spec, collides, weld, weld_parent):
+    """
+    Keep a robot's links from colliding with each other, as Gazebo does.
+
+    collides: (link name, self_collide) of every link with a collision geom; weld: per link,
+    the link at the root of its rigid group (None: fixed to the world); weld_parent: per group
+    root, the group its parent link belongs to (MuJoCo's welds). Two links of one model
+    collide only if both self-collide. MuJoCo itself never lets links of one rigid group
+    collide, nor two groups where one hangs from the other (unless that is the world): those
+    pairs need no exclude, and every exclude costs each spawn and delete of the robot.
+    """
+    def kept_apart_by_mujoco(first, second):  # see mj_collision
+        first, second = weld[first], weld[second]
+        if first == second:
+            return True
+        if first is None or second is None:
+            return False
+        return first == weld_parent[second] or second == weld_parent[first]
+    for index, (first, first_collides) in enumerate(collides):
+        for second, second_collides in collides[index + 1:]:
+            if not (first_collides and second_collides
+                    or kept_apart_by_mujoco(first, second)):
+                spec.add_exclude(bodyname1=first, bodyname2=second)
+
+
+def check_size(size, count, what, across):
+    """
+    Refuse a shape's size that is not positive, or whose extents exceed MAX_SIZE.
+
+    size: the shape's count numbers; across: what each number is multiplied by to give an
+    extent (a radius by 2).
+    """
+    if size.shape != (count,) or not np.all(np.isfinite(size)) or np.any(size <= 0.0):
+        raise UrdfError(f'{what} must be {count} positive numbers: {size.tolist()}')
+    extent = float(np.max(size * across))
+    if extent > MAX_SIZE:
+        raise UrdfError(f'{what} {size.tolist()}: the shape is {extent:g} m across, more '
+                        f'than the limit of {MAX_SIZE:g} m')
 
 
 def _plugin_setups(blocks, robot):
@@ -374,28 +415,8 @@ class _SpecBuilder:
         return [time_constant, damping_ratio]
 
     def _keep_links_apart(self):
-        """
-        Keep the robot's links from colliding with each other, as Gazebo does.
-
-        Two links of one model collide only if both set <selfCollide> true. MuJoCo itself
-        never lets links of one rigid group collide, nor two groups where one hangs from the
-        other (unless that is the world): those pairs need no exclude, and every exclude costs
-        each spawn and delete of the robot.
-        """
-        for index, (first, first_collides) in enumerate(self._collides):
-            for second, second_collides in self._collides[index + 1:]:
-                if not (first_collides and second_collides or self._kept_apart_by_mujoco(
-                        first, second)):
-                    self._spec.add_exclude(bodyname1=first, bodyname2=second)
-
-    def _kept_apart_by_mujoco(self, first, second):
-        """Tell whether MuJoCo filters the contacts of two links (see mj_collision)."""
-        first, second = self._weld[first], self._weld[second]
-        if first == second:
-            return True
-        if first is None or second is None:
-            return False
-        return first == self._weld_parent[second] or second == self._weld_parent[first]
+        """Keep the robot's links from colliding with each other, as Gazebo does."""
+        keep_links_apart(self._spec, self._collides, self._weld, self._weld_parent)
 
     def _set_inertia(self, body, link):
         inertial = link.inertial
@@ -412,13 +433,10 @@ class _SpecBuilder:
                             dtype=float)
         if not np.all(np.isfinite(tensor)):
             raise UrdfError(f"link '{link.name}' inertia contains NaN or infinity")
-        moments, axes = np.linalg.eigh(frames.rotate_tensor(orientation, tensor))
+        moments, principal = frames.principal_inertia(orientation, tensor)
         if moments[0] <= 0.0:
             raise UrdfError(f"link '{link.name}' inertia is not positive definite "
                             f'(principal moments {moments.tolist()})')
-        if np.linalg.det(axes) < 0.0:
-            axes[:, 2] = -axes[:, 2]
-        principal = frames.matrix_quaternion(axes)
         body.mass = mass
         body.ipos = position
         body.iquat = principal
@@ -436,17 +454,17 @@ class _SpecBuilder:
         geom = body.add_geom(pos=position, quat=orientation)
         if geometry.box is not None:
             size = np.asarray(geometry.box.size, dtype=float)
-            self._check_size(size, 3, f'{what} box size', across=(1.0, 1.0, 1.0))
+            check_size(size, 3, f'{what} box size', across=(1.0, 1.0, 1.0))
             geom.type = mujoco.mjtGeom.mjGEOM_BOX
             geom.size = size / 2.0
         elif geometry.cylinder is not None:
             size = np.array([geometry.cylinder.radius, geometry.cylinder.length], float)
-            self._check_size(size, 2, f'{what} cylinder radius and length', across=(2.0, 1.0))
+            check_size(size, 2, f'{what} cylinder radius and length', across=(2.0, 1.0))
             geom.type = mujoco.mjtGeom.mjGEOM_CYLINDER
             geom.size = [size[0], size[1] / 2.0, 0.0]
         elif geometry.sphere is not None:
             size = np.array([geometry.sphere.radius], float)
-            self._check_size(size, 1, f'{what} sphere radius', across=(2.0,))
+            check_size(size, 1, f'{what} sphere radius', across=(2.0,))
             geom.type = mujoco.mjtGeom.mjGEOM_SPHERE
             geom.size = [size[0], 0.0, 0.0]
         elif mesh_name is not None:
@@ -455,16 +473,6 @@ class _SpecBuilder:
         else:
             raise UrdfError(f'{what} has a <geometry> without shape')
         return geom
-
-    @staticmethod
-    def _check_size(size, count, what, across):
-        """Refuse a shape's size that is not positive, or whose extents exceed MAX_SIZE."""
-        if size.shape != (count,) or not np.all(np.isfinite(size)) or np.any(size <= 0.0):
-            raise UrdfError(f'{what} must be {count} positive numbers: {size.tolist()}')
-        extent = float(np.max(size * across))
-        if extent > MAX_SIZE:
-            raise UrdfError(f'{what} {size.tolist()}: the shape is {extent:g} m across, more '
-                            f'than the limit of {MAX_SIZE:g} m')
 
     def _visual_rgba(self, visual, link_name):
         material = visual.material

@@ -51,24 +51,34 @@ class MeshLoader:
         is a collision mesh whose vertices all lie in one plane, which MuJoCo cannot collide
         with (noted in left_out).
         """
-        scale = mesh.scale if mesh.scale is not None else 1.0
-        scale = np.broadcast_to(np.asarray(scale, dtype=float), (3,)).copy()
-        if not np.all(np.isfinite(scale)) or np.any(scale == 0.0):
-            raise UrdfError(f'{what} mesh scale must be finite and non-zero: {scale.tolist()}')
+        scale = _checked_scale(mesh.scale, what)
         try:
             path = resolve_mesh_path(mesh.filename, self._base_dir, self._package_resolver)
+        except MeshMissing as missing:
+            self.missing.append((mesh.filename, str(missing)))
+            return None
+        return self.add_file(path, mesh.filename, scale, what, collision=collision)
+
+    def add_file(self, path, filename, scale, what, *, collision=False):
+        """
+        Add the mesh file at a real path its description's own rules allowed; as add() does.
+
+        filename is the name as written, for the notes; scale one number or three (None: 1).
+        """
+        scale = _checked_scale(scale, what)
+        try:
             if path not in self._decoded:
                 self._decoded[path] = read_mesh(path)
         except MeshMissing as missing:
-            self.missing.append((mesh.filename, str(missing)))
+            self.missing.append((filename, str(missing)))
             return None
         vertices, faces = self._decoded[path]
         extent = float(np.max(np.ptp(vertices, axis=0).astype(float) * np.abs(scale)))
         if extent > MAX_SIZE:
-            raise UrdfError(f'{what} mesh {quoted(mesh.filename)} scaled by {scale.tolist()} is '
+            raise UrdfError(f'{what} mesh {quoted(filename)} scaled by {scale.tolist()} is '
                             f'{extent:g} m across, more than the limit of {MAX_SIZE:g} m')
         if collision and _is_flat(vertices * scale):
-            self.left_out.append(f"{what} collision mesh '{mesh.filename}' is flat, and MuJoCo "
+            self.left_out.append(f"{what} collision mesh '{filename}' is flat, and MuJoCo "
                                  'collides only with solid shapes: that collision is left out')
             return None
         mj_mesh = self._spec.add_mesh(name=f'mesh{len(self.files)}')
@@ -79,6 +89,15 @@ class MeshLoader:
         mj_mesh.inertia = mujoco.mjtMeshInertia.mjMESH_INERTIA_SHELL
         self.files.append(path)
         return mj_mesh.name
+
+
+def _checked_scale(scale, what):
+    """Return a mesh's scale as three numbers, refusing one that is not finite and non-zero."""
+    scale = scale if scale is not None else 1.0
+    scale = np.broadcast_to(np.asarray(scale, dtype=float), (3,)).copy()
+    if not np.all(np.isfinite(scale)) or np.any(scale == 0.0):
+        raise UrdfError(f'{what} mesh scale must be finite and non-zero: {scale.tolist()}')
+    return scale
 
 
 def resolve_mesh_path(filename, base_dir, package_resolver):

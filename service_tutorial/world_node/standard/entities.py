@@ -11,6 +11,7 @@ simulation time while it runs, as the lesson's do.
 from service_tutorial.conversions import pose_from_msg, twist_from_msg
 from service_tutorial.sim import frames
 from service_tutorial.sim import validation
+from service_tutorial.sim.description_formats import FORMATS
 from service_tutorial.sim.validation import quoted, WorldError
 from service_tutorial.world_node.answers import raise_refusal, Refusal, SPAWN_CODES
 from service_tutorial.world_node.answers import standard_answer
@@ -46,7 +47,7 @@ class EntityServices:
         SimulatorFeatures.SPAWNING_RESOURCE_STRING, SimulatorFeatures.ENTITY_STATE_GETTING,
         SimulatorFeatures.ENTITY_STATE_SETTING, SimulatorFeatures.ENTITY_INFO_GETTING,
         SimulatorFeatures.ENTITY_INFO_SETTING, SimulatorFeatures.SPAWNING_ENTITIES)
-    SPAWN_FORMATS = ('urdf', 'mjcf')
+    SPAWN_FORMATS = tuple(FORMATS)  # 'urdf', 'mjcf', 'sdf'
 
     def __init__(self, node, package_share=package_share):
         """Serve node's world under names relative to node's namespace (/spawn_entity...)."""

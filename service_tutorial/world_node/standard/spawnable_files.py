@@ -1,20 +1,20 @@
 """
 The robot files of installed ament packages that a spawn uri may name, found and read once.
 
-A robot file lies in a package share's urdf/, models/ or mjcf/ folder (or a folder a request
-names as a source), at most MAX_DEPTH folders below it: a .urdf, a .xacro expanded with its
-default arguments, or an MJCF .xml/.mjcf whose root is <mujoco>. A file is read and built by
-the same reader and the same format loader as a spawn by its uri (sim/robot_files.py,
-sim/description_formats.py), so a file is offered exactly when a spawn would take it, and one
-left out says the spawn's own reason. The same roots as a spawn uri's hold: a source is
+A robot file lies in a package share's urdf/, models/, mjcf/ or sdf/ folder (or a folder a request
+names as a source), at most MAX_DEPTH folders below it: a .urdf, a .xacro expanded with its default
+arguments, an MJCF .xml/.mjcf whose root is <mujoco>, an SDF .sdf, or an SDF model folder (one with
+a model.config, offered as the folder, which is not looked into). A file is read and built by the
+same reader and the same format loader as a spawn by its uri (sim/robot_files.py,
+sim/description_formats.py), so a file is offered exactly when a spawn would take it, and one left
+out says the spawn's own reason. The same roots as a spawn uri's hold: a source is
 package://<package>/<folder> or file://<folder> in an installed share, with no '..'; links to
-folders are not followed, a file whose link leads out of its share is left out unread.
-Reading a file (expanding, building, compiling it alone) is kept
-under its uri, real path, modification time and size, so a second call costs only the walk;
-a call reads new files for READING_SECONDS at most and leaves the rest to the next, so a world
-with many packages is not held up for long. (A xacro file whose includes change while it does
-not is read again only once it changes too.) No rclpy: the words for a robot's plugins come
-from the caller.
+folders are not followed, a file whose link leads out of its share is left out unread. Reading a
+file (expanding, building, compiling it alone) is kept under its uri, real path, modification time
+and size, so a second call costs only the walk; a call reads new files for READING_SECONDS at most
+and leaves the rest to the next, so a world with many packages is not held up for long. (A xacro
+file whose includes change while it does not is read again only once it changes too.) No rclpy: the
+words for a robot's plugins come from the caller.
 """
 
 import collections
@@ -28,12 +28,14 @@ from service_tutorial.sim import bounds
 from service_tutorial.sim.description_formats import FORMATS
 from service_tutorial.sim.package_files import confined_path, PackageFileError, within
 from service_tutorial.sim.robot_files import file_model_name, read_uri
+from service_tutorial.sim.sdf.paths import MODEL_CONFIG
 from service_tutorial.sim.urdf.hardened_xml import parse_xml
 from service_tutorial.sim.validation import Reason, WorldError
 
-ROBOT_FOLDERS = ('urdf', 'models', 'mjcf')
+ROBOT_FOLDERS = ('urdf', 'models', 'mjcf', 'sdf')
 URDF_EXTENSIONS = ('.urdf', '.xacro')
 MJCF_EXTENSIONS = ('.xml', '.mjcf')
+SDF_EXTENSIONS = ('.sdf',)
 MAX_DEPTH = 3  # folders below a robot folder or a source
 MAX_SOURCES = 32
 MAX_FILES = 500  # robot files one call reads or takes from the cache
@@ -100,7 +102,7 @@ class FileWalk:
         return self.skipped > 0 or self._entries_left < 0
 
     def walk_package(self, package, share):
-        """Add the robot files of a package's (real) share: its urdf/, models/, mjcf/."""
+        """Add the robot files of a package's (real) share: its urdf/, models/, mjcf/, sdf/."""
         for name in ROBOT_FOLDERS:
             folder = os.path.join(share, name)
             if os.path.isdir(folder) and not os.path.islink(folder):
@@ -119,24 +121,27 @@ class FileWalk:
         self._entries_left -= len(entries)
         if self._entries_left < 0:
             return
+        if any(entry.name == MODEL_CONFIG for entry in entries):
+            self._add(package, share, folder)  # an SDF model folder: the folder is the robot
+            return
         subfolders = []
         for entry in sorted(entries, key=lambda entry: entry.name):
             if entry.is_dir(follow_symlinks=False):
                 subfolders.append(entry.path)
-            elif entry.name.lower().endswith(URDF_EXTENSIONS + MJCF_EXTENSIONS):
-                self._add(package, share, entry)
+            elif entry.name.lower().endswith(URDF_EXTENSIONS + MJCF_EXTENSIONS + SDF_EXTENSIONS):
+                self._add(package, share, entry.path)
         if depth > 0:
             for subfolder in subfolders:
                 self.walk(package, share, subfolder, depth - 1)
 
     def _add(self, package, share, entry):
-        uri = f'package://{package}/{os.path.relpath(entry.path, share)}'
+        uri = f'package://{package}/{os.path.relpath(entry, share)}'
         if uri in self.found or uri in self.links_out:
             return
-        path = os.path.realpath(entry.path)
+        path = os.path.realpath(entry)
         if not within(path, share):
             self.links_out.append(uri)
-        elif not os.path.isfile(path):
+        elif not os.path.exists(path):
             return
         elif len(self.found) >= self.max_files:
             self.skipped += 1
@@ -198,6 +203,8 @@ class RobotFileReader:
             description = FORMATS[robot.model_format].load(
                 robot.text, base_dir=robot.base_dir, package_resolver=self._package_resolver)
         except WorldError as error:
+            if error.reason == Reason.UNSUPPORTED_FORMAT and robot.model_format == 'sdf':
+                return None  # an SDF world: LoadWorld's, no robot
             return LeftOut(uri, _one_line(error))
         try:  # compiled alone, as a spawn compiles it into the world
             box = bounds.description_box(description)
@@ -207,6 +214,8 @@ class RobotFileReader:
         words = list(self._plugin_words(description)) or ['no drive or sensors']
         if robot.model_format == 'mjcf':
             words.insert(0, f'MJCF, {len(description.actuators)} actuators')
+        if description.ignored_plugins:
+            words.append(f'plugins not simulated: {", ".join(description.ignored_plugins)}')
         if description.anchored:
             words.append('fixed to the world')
         return RobotFileOffer(uri, f'{name}: {"; ".join(words)}', box)

@@ -2,19 +2,19 @@
 The standard's GetSpawnables: the robot files a spawn uri may name, what each is, its bounds.
 
 Offered are the robot files of every installed ament package (this one's models/ among them):
-.urdf, .xacro and MJCF files in its share's urdf/, models/ and mjcf/ folders and theirs below,
-each by the package:// uri SpawnEntity takes as it is (spawnable_files.py finds and reads
-them). A Spawnable's description names the robot and its drives and sensors with the topics a
-spawn without a namespace gives them ('tinybot: a diff-drive on cmd_vel, odom, joint_states;
-a laser on scan'), and says when it is fixed to the world; its bounds are the box
-GetEntityBounds gives the spawned entity, found by compiling the robot alone: the world's own
-model is not touched. The world's scenery file (yard.urdf by default) is not offered: it is
-already in the world as its walls and floor, and a copy spawned on top of it would only
-overlap them. An installed .xacro file is expanded with its default arguments, as a spawn by
-its uri expands it; one that is only macros or properties, and any file that does not load,
-is left out and counted in the message. A request's sources add folders under the same rules
-as a spawn uri; a source that is refused is named in the message with the reason, and the
-answer is still RESULT_OK, as the standard has it ("not fatal").
+.urdf, .xacro, MJCF and SDF files and SDF model folders in its share's urdf/, models/, mjcf/ and
+sdf/ folders and theirs below, each by the package:// uri SpawnEntity takes as it is
+(spawnable_files.py finds and reads them). A Spawnable's description names the robot and its drives
+and sensors with the topics a spawn without a namespace gives them ('tinybot: a diff-drive on
+cmd_vel, odom, joint_states; a laser on scan'), and says when it is fixed to the world; its bounds
+are the box GetEntityBounds gives the spawned entity, found by compiling the robot alone: the
+world's own model is not touched. The world's scenery file (yard.urdf by default) is not offered:
+it is already in the world as its walls and floor, and a copy spawned on top of it would only
+overlap them. An installed .xacro file is expanded with its default arguments, as a spawn by its
+uri expands it; one that is only macros or properties, and any file that does not load, is left out
+and counted in the message. A request's sources add folders under the same rules as a spawn uri; a
+source that is refused is named in the message with the reason, and the answer is still RESULT_OK,
+as the standard has it ("not fatal").
 """
 
 import os

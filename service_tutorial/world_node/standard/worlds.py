@@ -2,18 +2,22 @@
 The standard's worlds: LoadWorld, UnloadWorld, GetCurrentWorld and GetAvailableWorlds.
 
 A world is a world file (sim/world_files.py) in the worlds/ folder of this or any installed
-package, found by its uri, or given as text; a URDF or MJCF scenery file alone loads too, as a
-world with that scenery and nothing else. Every world is on this machine, so offline_only
-changes nothing. Where the standard leaves a choice:
-- A load removes every entity, loads the world, spawns its models and leaves it STOPPED at time
-  0. It is all or nothing (world_loader.py): a load that fails leaves the previous world, or the
+package, found by its uri, or given as text: this package's own (.world.xml) or Gazebo's (SDF,
+.world or .sdf), whose static models are its scenery and whose other models its entities, with its
+own timestep and gravity; a URDF or MJCF scenery file alone loads too, as a world with that scenery
+and nothing else. Every world is on this machine, so offline_only changes nothing. Where the
+standard leaves a choice:
+- A load removes every entity, loads the world, spawns its models and leaves it STOPPED at time 0.
+  It is all or nothing (world_loader.py): a load that fails leaves the previous world, or the
   no-world state, exactly as it was, and says which with the standard's code.
-- fail_on_unsupported_element refuses a world file with elements this world does not know
-  (106); without it they are ignored and named in the answer's message.
+- fail_on_unsupported_element refuses a world file with elements this world does not know (106);
+  without it they are ignored and named in the answer's message.
 - The scenery's missing meshes are left out and named (ignore_missing_or_unsupported_assets or
-  not); a model or scenery file the world names that is not there is MISSING_ASSETS (104), a
-  scenery with moving joints or plugins UNSUPPORTED_ASSETS (105), one that does not compile a
-  parse error (103).
+  not), and so is an SDF world's moving model whose every collision is a missing mesh (it would
+  fall for ever); the elements an SDF world holds and the world does not simulate (sensors,
+  gz-sim's model plugins, Gazebo Classic's <state>) are unsupported elements as above; a model or
+  scenery file the world names that is not there is MISSING_ASSETS (104), a scenery with moving
+  joints or plugins UNSUPPORTED_ASSETS (105), one that does not compile a parse error (103).
 - GetAvailableWorlds lists the world files of every package's worlds/ and of additional_sources
   (folders inside a package's share, as package:// or file:// uris). A world file that does not
   read is a failed source: DEFAULT_SOURCES_FAILED (101) with the others listed, or OK with the
@@ -25,7 +29,7 @@ import os
 from service_tutorial.sim.package_files import confined_path, package_uri, PackageFileError
 from service_tutorial.sim.validation import quoted, Reason, WorldError
 from service_tutorial.sim.world_files import parse_world, read_world_file
-from service_tutorial.sim.world_files import WORLD_FILE_SUFFIX
+from service_tutorial.sim.world_files import SDF_WORLD_SUFFIXES, WORLD_SUFFIXES
 from service_tutorial.world_node.answers import LOAD_WORLD_CODES, Refusal, standard_answer
 from service_tutorial.world_node.packages import installed_shares
 from service_tutorial.world_node.standard.entity_filters import tags_test
@@ -75,7 +79,19 @@ class WorldServices:
             self.node.after_reset()
             fill_world(response.world, loaded)
             self.node.get_logger().info(f'LoadWorld: loaded world {quoted(loaded.world.name)}')
-            return f'ignored: {", ".join(ignored[:10])}' if ignored else ''
+            meshes, models = prepared.left_out()
+            said = [f'ignored: {", ".join(ignored[:10])}' + _more(ignored, 10)] if ignored \
+                else []
+            if meshes:
+                said.append(f'meshes not found, left out: {", ".join(meshes[:10])}'
+                            + _more(meshes, 10))
+            if models:
+                said.append('models left out, as nothing of them collides without their '
+                            f'missing meshes: {", ".join(map(quoted, models[:10]))}'
+                            + _more(models, 10))
+            for note in prepared.scenery.notes if prepared.scenery else ():
+                self.node.get_logger().warning(f'LoadWorld: {note}')
+            return '; '.join(said)
         before = self.loader.current
         note = standard_answer(self.node, 'LoadWorld', response.result,
                                self.node.holding_time(load), LOAD_WORLD_CODES)
@@ -173,7 +189,7 @@ class WorldServices:
                 failures.append(failure)
                 continue
             names = sorted(name for name in os.listdir(folder)
-                           if name.endswith(WORLD_FILE_SUFFIX))[:MAX_WORLD_FILES]
+                           if name.endswith(WORLD_SUFFIXES))[:MAX_WORLD_FILES]
             for name in names:
                 path = os.path.realpath(os.path.join(folder, name))
                 uri = package_uri(path, self.package_share)
@@ -182,14 +198,21 @@ class WorldServices:
                                     'package')
                     continue
                 try:
-                    world = read_world_file(path, self.package_share, shown=uri)
+                    world = read_world_file(path, self.package_share, shown=uri, listing=True)
                 except WorldError as error:
-                    failures.append(str(error))
-                    continue
+                    if not (name.endswith(SDF_WORLD_SUFFIXES)
+                            and error.reason == Reason.UNSUPPORTED_FORMAT):
+                        failures.append(str(error))
+                    continue  # an SDF model beside the worlds is no world
                 resource = WorldResource()
                 fill_world(resource, LoadedWorld(world, uri))
                 resources.append(resource)
         return resources, failures
+
+
+def _more(items, shown):
+    """Say how many items more there are than the shown first ones, or ''."""
+    return f' (and {len(items) - shown} more)' if len(items) > shown else ''
 
 
 def fill_world(message, loaded):
