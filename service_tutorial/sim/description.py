@@ -6,6 +6,8 @@ file; both refuse what they cannot use with UrdfError and read numbers with pars
 The geom groups say which geoms a robot shows and which a laser sees.
 """
 
+import collections
+from dataclasses import dataclass
 import math
 
 from service_tutorial.sim.validation import quoted
@@ -64,3 +66,17 @@ def check_update_rate(rate, what):
     if rate > MAX_UPDATE_RATE:
         raise UrdfError(f'{what} must be at most {MAX_UPDATE_RATE:g} Hz: {rate:g}')
     return rate
+
+
+# A link or joint as a plugin reads it, as yourdfpy's robot has them: its name, and a joint's
+# type (revolute, continuous...).
+OutlineElement = collections.namedtuple('OutlineElement', ('name', 'type'), defaults=('',))
+
+
+@dataclass(frozen=True)
+class RobotOutline:
+    """What a plugin reads of a robot of any format, as yourdfpy's robot has it for a URDF."""
+
+    name: str
+    links: tuple  # OutlineElements
+    joints: tuple  # OutlineElements, with their types

@@ -56,7 +56,7 @@ def _build_sdf(text, base_dir, package_resolver, timestep):
     # The reader of robot files reads what an SDF model includes; it imports this module.
     from service_tutorial.sim.robot_files import read_description_text
     return load_sdf(text, base_dir=base_dir, package_resolver=package_resolver,
-                    read_file=read_description_text)
+                    read_file=read_description_text, timestep=timestep)
 
 
 def _sdf_model_name(root):

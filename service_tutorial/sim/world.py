@@ -31,6 +31,8 @@ from service_tutorial.sim.validation import WorldError
 
 # The world's log: one name for everything that happens to its models.
 WORLD_LOG = 'service_tutorial.world'
+# gz-sim's name for a world that names none; gz topics of sensors name their world.
+DEFAULT_WORLD_NAME = 'default'
 # MuJoCo's warnings are the process's: one log for them, whichever world they come from.
 _mujoco_logger = core_logger(WORLD_LOG)
 
@@ -65,13 +67,16 @@ class World:
     """
 
     def __init__(self, *, timestep=0.002, gravity=scene.EARTH_GRAVITY, cmd_vel_timeout=0.5,
-                 package_resolver=None, scenery=None, background_rendering=False, logger=None):
+                 package_resolver=None, scenery=None, background_rendering=False, logger=None,
+                 name=DEFAULT_WORLD_NAME, spherical_coordinates=None):
         """
         Create a world without models, with the static obstacles of a scenery file if given.
 
         scenery: a path or a Scenery; package_resolver maps a package to its share folder, for
         package:// meshes (none: refused); background_rendering draws cameras on a thread;
-        logger: where the world says what happens to its models (core_logger(WORLD_LOG)).
+        logger: where the world says what happens to its models (core_logger(WORLD_LOG));
+        name: what gz topics call the world; spherical_coordinates: where its origin lies on
+        the Earth (a geodesy.SphericalCoordinates), None if nowhere.
         """
         timestep, gravity = _physics(timestep, gravity)
         cmd_vel_timeout = validation.non_negative_number(cmd_vel_timeout, 'cmd_vel_timeout')
@@ -80,6 +85,8 @@ class World:
         self._timestep = timestep
         self._cmd_vel_timeout = cmd_vel_timeout
         self._paused = False
+        self._name = name
+        self._spherical_coordinates = spherical_coordinates
         self._models = {}
         self._package_resolver = package_resolver
         self._descriptions = DescriptionCache(package_resolver, timestep)
@@ -121,6 +128,16 @@ class World:
     def cmd_vel_timeout(self):
         """Return how long a drive's velocity command lasts, in seconds (0: for ever)."""
         return self._cmd_vel_timeout
+
+    @property
+    def name(self):
+        """Return the world's name, as gz topics name it."""
+        return self._name
+
+    @property
+    def spherical_coordinates(self):
+        """Return where the world's origin lies on the Earth, or None if it says nowhere."""
+        return self._spherical_coordinates
 
     @property
     def paused(self):
@@ -214,10 +231,16 @@ class World:
         self.forward()
         self._logger.info("deleted model '%s'", name)
 
-    def load(self, scenery, *, timestep=None, gravity=None):
-        """Take a new scenery (a Scenery or None) with no models, at time 0, and new physics."""
+    def load(self, scenery, *, timestep=None, gravity=None, name=DEFAULT_WORLD_NAME,
+             spherical_coordinates=None):
+        """
+        Take a new scenery (a Scenery or None) with no models, at time 0, and new physics.
+
+        name and spherical_coordinates: the new world's, as the constructor takes them.
+        """
         timestep, gravity = _physics(self._timestep if timestep is None else timestep,
                                      self._scene.gravity if gravity is None else gravity)
+        self._name, self._spherical_coordinates = name, spherical_coordinates
         if timestep != self._timestep:  # robots are built for their world's timestep
             self._timestep = timestep
             self._descriptions = DescriptionCache(self._package_resolver, timestep)

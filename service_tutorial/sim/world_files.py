@@ -105,6 +105,7 @@ class WorldFile:
     physics: tuple = None  # (timestep, gravity) the world says, None for the node's own
     sdf_world: object = None  # an SDF world read (sdf/world.py): its static models
     left_out: tuple = ()  # names of models left out: none of their collisions is there
+    spherical_coordinates: object = None  # where its origin lies on the Earth (SDF), or None
 
 
 def read_world_file(path, package_share, *, shown=None, scenery_alone=False, listing=False):
@@ -197,7 +198,7 @@ def _sdf_world(data, what, base_dir, package_share, listing):
                      tags=(SDF_TAG,),
                      scenery='', models=models, unsupported=world.not_simulated,
                      physics=(world.timestep, world.gravity), sdf_world=world,
-                     left_out=world.left_out)
+                     left_out=world.left_out, spherical_coordinates=world.spherical_coordinates)
 
 
 def _sdf_description(version):

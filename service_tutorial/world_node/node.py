@@ -134,7 +134,8 @@ class MujocoWorld(Node):
                            cmd_vel_timeout=parameters['cmd_vel_timeout'],
                            package_resolver=package_share,
                            scenery=start_up and start_up.scenery,
-                           background_rendering=True)  # a camera never holds up an answer
+                           background_rendering=True,  # a camera never holds up an answer
+                           **(start_up.place if start_up else {}))
         self.pacer = Pacer(timestep=self.world.timestep,
                            real_time_factor=parameters['real_time_factor'],
                            periods={stream: 1.0 / parameters[name]

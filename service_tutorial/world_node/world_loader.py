@@ -83,6 +83,12 @@ class PreparedWorld:
     timestep: float  # s
     gravity: tuple  # m/s^2
 
+    @property
+    def place(self):
+        """Return the world's name and where it lies on the Earth, as World.load() takes them."""
+        world = self.loaded.world
+        return {'name': world.name, 'spherical_coordinates': world.spherical_coordinates}
+
     def left_out(self):
         """Return what the world leaves out: (meshes not found, models with nothing to collide)."""
         return (self.scenery.missing_meshes if self.scenery else ()), self.loaded.world.left_out
@@ -257,7 +263,7 @@ class WorldLoader:
         """Replace the world: every entity goes, the prepared scenery and models come."""
         self._clear()
         self.node.world.load(prepared.scenery, timestep=prepared.timestep,
-                             gravity=prepared.gravity)
+                             gravity=prepared.gravity, **prepared.place)
         self.node.viewer.reopen()
         self.populate(prepared)
         self._pause()

@@ -2,39 +2,97 @@
 Plugins attached to a model by a Gazebo <plugin> block, one module per kind, free of ROS.
 
 A plugin module is named in KINDS below, by the Gazebo plugin it stands in for, and defines
-PLUGIN, a Plugin subclass. Loading a URDF calls PLUGIN.configure() on the block and
-PLUGIN.build() on the robot's spec; spawning the robot makes one PLUGIN(config, block) per
-block, and the world's step calls it through the methods of Plugin. Adding a kind touches this
-table and a new module, not the world. drive_config.py is no kind: it reads the parameters of
-the drives.
+PLUGIN, a Plugin subclass. Loading a URDF or SDF model calls PLUGIN.configure() on the block
+and PLUGIN.build() on the robot's spec (configure_plugins); spawning the robot makes one
+PLUGIN(config, block) per block, and the world's step calls it through the methods of Plugin.
+Adding a kind touches this table and a new module, not the world. Gazebo Classic's plugins go
+by the name in their <plugin filename>; gz-sim's systems by their library's name, however the
+filename writes it (libgz-sim8-diff-drive-system.so, ignition-gazebo-diff-drive-system), and
+gz-sim's sensors, which have no plugin, by their <sensor type> (sensor_kind). drive_config.py,
+gz_names.py and gz_parameters.py are no kinds: they read the drives' parameters, name gz
+topics and frames, and read gz's parameters.
 """
 
 from dataclasses import dataclass
 import importlib
 import math
+import re
 
+from service_tutorial.sim.description import UrdfError
+
+_MODULE = 'service_tutorial.sim.plugins.'
 # Gazebo plugin name (as it appears in the <plugin filename>) -> module that stands in for it.
 # A name that is part of another (gazebo_ros_imu) comes after it: kind_of() takes the first match.
 KINDS = {
-    'gazebo_ros_diff_drive': 'service_tutorial.sim.plugins.diff_drive',
-    'gazebo_ros_skid_steer_drive': 'service_tutorial.sim.plugins.skid_steer',
-    'gazebo_ros_laser': 'service_tutorial.sim.plugins.ray_sensor',
-    'gazebo_ros_ray_sensor': 'service_tutorial.sim.plugins.ray_sensor',
-    'gazebo_ros_camera': 'service_tutorial.sim.plugins.camera_sensor',
-    'gazebo_ros_imu_sensor': 'service_tutorial.sim.plugins.imu_sensor',
-    'gazebo_ros_imu': 'service_tutorial.sim.plugins.imu_sensor',
-    'gazebo_ros_joint_state_publisher': 'service_tutorial.sim.plugins.joint_state_publisher',
+    'gazebo_ros_diff_drive': _MODULE + 'diff_drive',
+    'gazebo_ros_skid_steer_drive': _MODULE + 'skid_steer',
+    'gazebo_ros_laser': _MODULE + 'ray_sensor',
+    'gazebo_ros_ray_sensor': _MODULE + 'ray_sensor',
+    'gazebo_ros_camera': _MODULE + 'camera_sensor',
+    'gazebo_ros_imu_sensor': _MODULE + 'imu_sensor',
+    'gazebo_ros_imu': _MODULE + 'imu_sensor',
+    'gazebo_ros_joint_state_publisher': _MODULE + 'joint_state_publisher',
+    # gz-sim's systems, by their library's name.
 }
+# gz-sim's sensors, by <sensor type> (sdformat's aliases beside the names): their kinds are
+# GZ_SENSOR + the type, each matched whole.
+GZ_SENSOR = 'gz-sensor:'
+GZ_SENSORS = {}
+# libgz-sim8-diff-drive-system.so, ignition-gazebo-diff-drive-system... -> diff-drive.
+_SYSTEM = re.compile(r'^(?:lib)?(?:gz-sim\d*|ignition-gazebo\d*)-(.+)-system(?:\.so)?$')
+
+
+def gz_system(filename):
+    """Return gz-sim's name of a system's library (gz-sim-<name>-system), or None if none."""
+    match = _SYSTEM.match((filename or '').strip())
+    return f'gz-sim-{match.group(1)}-system' if match else None
+
+
+def sensor_kind(sensor_type):
+    """Return the kind of a gz-sim sensor of a <sensor type>, or None if it is not simulated."""
+    module = GZ_SENSORS.get((sensor_type or '').strip())
+    return None if module is None else GZ_SENSOR + sensor_type.strip()
 
 
 def kind_of(filename):
-    """Return the registered plugin kind a <plugin filename> names, or None."""
-    return next((kind for kind in KINDS if kind in (filename or '')), None)
+    """Return the registered plugin kind a <plugin filename> (or a sensor kind) names, or None."""
+    filename = (filename or '').strip()
+    if filename.startswith(GZ_SENSOR):
+        return filename if filename[len(GZ_SENSOR):] in GZ_SENSORS else None
+    system = gz_system(filename)
+    if system is not None:
+        return system if system in KINDS else None
+    return next((kind for kind in KINDS if kind in filename), None)
 
 
 def plugin_class(kind):
     """Return the Plugin subclass that stands in for a registered Gazebo plugin kind."""
+    if kind.startswith(GZ_SENSOR):
+        return importlib.import_module(GZ_SENSORS[kind[len(GZ_SENSOR):]]).PLUGIN
     return importlib.import_module(KINDS[kind]).PLUGIN
+
+
+def configure_plugins(blocks, robot):
+    """
+    Configure every block of a registered kind; return their PluginSetups and their notes.
+
+    robot: what the plugins read of the robot (its name, links and joints, as yourdfpy's
+    robot has them). A robot may carry one plugin of a single kind, and one drive of any kind.
+    """
+    setups, notes = [], []
+    for block in blocks:
+        kind = kind_of(block.filename)
+        if kind is None:
+            continue
+        plugin = plugin_class(kind)
+        if plugin.single and any(setup.kind == kind for setup in setups):
+            raise UrdfError(f'model_xml carries more than one {plugin.title} plugin')
+        if plugin.is_drive and any(plugin_class(setup.kind).is_drive for setup in setups):
+            raise UrdfError(f'model_xml carries a {plugin.title} plugin besides another drive')
+        config = plugin.configure(block, robot)
+        notes.extend(getattr(config, 'notes', ()))
+        setups.append(PluginSetup(kind, block, config))
+    return tuple(setups), notes
 
 
 def next_event(models):

@@ -9,15 +9,21 @@ links make one tree: links that are free of each other (no joint between them) a
 unless the model is static, when every link is welded where it stands. Inertials, shapes,
 surface friction, colours (Gazebo's material scripts by name) and a link's gravity are built as
 the URDF builder builds them, its mesh files read by meshes.py; links of one model collide with
-each other only if both self-collide. gz-sim's <plugin>s are named as not simulated; the
-model's top <pose> gives way to the spawn pose, as ros_gz_sim's create has it.
+each other only if both self-collide. The model's <plugin>s and its links' <sensor>s are
+configured and built as a URDF's are (plugins.configure_plugins), unless the model is a
+world's scenery, where they are named as not simulated; the model's top <pose> gives way to the
+spawn pose, as ros_gz_sim's create has it.
 """
+
+import dataclasses
 
 import mujoco
 import numpy as np
 
 from service_tutorial.sim import frames
+from service_tutorial.sim import plugins
 from service_tutorial.sim.description import COLLISION_GROUP, UrdfError, VISUAL_GROUP
+from service_tutorial.sim.description import OutlineElement, RobotOutline
 from service_tutorial.sim.sdf.paths import SdfPaths
 from service_tutorial.sim.sdf.poses import IDENTITY, relative, WORLD_FRAME
 from service_tutorial.sim.sdf.reader import NO_LIMIT, parse_sdf, SdfReading
@@ -36,12 +42,14 @@ _SHAPE_TYPES = {'box': mujoco.mjtGeom.mjGEOM_BOX, 'sphere': mujoco.mjtGeom.mjGEO
                 'plane': mujoco.mjtGeom.mjGEOM_PLANE, 'mesh': mujoco.mjtGeom.mjGEOM_MESH}
 
 
-def load_sdf(text, *, base_dir=None, package_resolver=None, read_file, paths=None):
+def load_sdf(text, *, base_dir=None, package_resolver=None, read_file, paths=None,
+             timestep=0.002):
     """
     Build the RobotDescription of an SDF model's text, or raise DescriptionError naming why.
 
     base_dir: the folder of the file the text came from (None: a text); read_file(path, what)
-    reads an included file; paths: the SdfPaths to resolve uris with (made if None).
+    reads an included file; paths: the SdfPaths to resolve uris with (made if None); timestep:
+    of the world the model goes to, which its plugins tune their actuators for.
     """
     reading = SdfReading(paths or SdfPaths(package_resolver), read_file)
     root, version = parse_sdf(text, 'SDF')
@@ -53,17 +61,37 @@ def load_sdf(text, *, base_dir=None, package_resolver=None, read_file, paths=Non
         raise DescriptionError(f'SDF must hold one <model> to spawn, not '
                                f'{", ".join(f"<{child.tag}>" for child in found) or "none"}')
     model = reading.model(found[0], version, base_dir)
-    return build(model, package_resolver, notes=reading.notes, files=reading.files)
+    return build(model, package_resolver, notes=reading.notes, files=reading.files,
+                 ignored_plugins=reading.ignored_plugins, timestep=timestep)
 
 
-def build(model, package_resolver, *, scenery=False, notes=(), files=()):
+def build(model, package_resolver, *, scenery=False, notes=(), files=(), ignored_plugins=(),
+          timestep=0.002):
     """
     Return the RobotDescription of an SdfModel.
 
-    scenery: the model is part of a world's scenery, where planes may be; notes: what its
-    file holds that is not simulated; files: the files it was read from (includes).
+    scenery: the model is part of a world's scenery, where planes may be and plugins are not
+    simulated; notes: what its file holds that is not simulated, ignored_plugins the filenames
+    of the <plugin>s among it; files: the files it was read from (includes); timestep: of the
+    world the model goes to.
     """
-    return _SpecBuilder(model, package_resolver, scenery).build(notes, files)
+    description = _SpecBuilder(model, package_resolver, scenery).build(notes, files)
+    blocks = model.plugins + tuple(block for link in model.links for block in link.sensors)
+    if scenery or not blocks:
+        return dataclasses.replace(description, ignored_plugins=tuple(ignored_plugins))
+    outline = RobotOutline(
+        name=model.name, links=tuple(OutlineElement(link.name) for link in model.links),
+        joints=tuple(OutlineElement(joint.name, joint.kind) for joint in model.joints))
+    try:
+        setups, plugin_notes = plugins.configure_plugins(blocks, outline)
+        for setup in setups:
+            plugins.plugin_class(setup.kind).build(description.spec, setup.config, timestep)
+    except UrdfError as error:
+        raise DescriptionError(f'model {quoted(model.name)}: {error}') from None
+    return dataclasses.replace(
+        description, plugins=setups, ignored_plugins=tuple(ignored_plugins),
+        actuators=tuple(actuator.name for actuator in description.spec.actuators),
+        notes=tuple(plugin_notes) + description.notes)
 
 
 def note_of(notes):
@@ -114,7 +142,6 @@ class _SpecBuilder:
             root_position=tuple(root_link.pose[0]), root_orientation=tuple(root_link.pose[1]),
             links=tuple(self._links), joints=tuple(self._joint_names),
             mesh_files=tuple(self._meshes.files), missing_meshes=tuple(uri for uri, _ in missing),
-            ignored_plugins=tuple(dict.fromkeys(filter(None, model.plugins))),
             notes=tuple(notes), source_files=tuple(dict.fromkeys(files)))
 
     def _static_tree(self):

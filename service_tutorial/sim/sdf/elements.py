@@ -10,8 +10,8 @@ DescriptionError that names the element when it is not what SDF says it is, or i
 """
 
 import math
-import re
 
+from service_tutorial.sim.plugins import gz_system
 from service_tutorial.sim.validation import DescriptionError
 from service_tutorial.sim.validation import quoted
 
@@ -23,12 +23,14 @@ MAX_INERTIA = 1e12  # kg m^2
 MAX_SCALE = 1e6  # a mesh's scale
 # Per element, the children the reader reads; and those accepted without effect.
 READ = {
-    'world': ('model', 'include', 'physics', 'gravity', 'frame', 'plugin'),
+    'world': ('model', 'include', 'physics', 'gravity', 'frame', 'plugin',
+              'spherical_coordinates'),
     'physics': ('max_step_size',),
     'model': ('static', 'self_collide', 'pose', 'link', 'joint', 'model', 'include', 'frame',
               'plugin'),
     'include': ('uri', 'name', 'static', 'pose', 'placement_frame'),
-    'link': ('gravity', 'self_collide', 'pose', 'inertial', 'collision', 'visual', 'kinematic'),
+    'link': ('gravity', 'self_collide', 'pose', 'inertial', 'collision', 'visual', 'kinematic',
+             'sensor'),
     'inertial': ('mass', 'pose', 'inertia'),
     'collision': ('pose', 'geometry', 'surface'),
     'visual': ('pose', 'geometry', 'material', 'transparency'),
@@ -42,8 +44,7 @@ READ = {
     'surface': ('friction',),
 }
 QUIET = {
-    'world': ('gui', 'scene', 'light', 'magnetic_field', 'atmosphere', 'wind',
-              'spherical_coordinates', 'audio'),
+    'world': ('gui', 'scene', 'light', 'magnetic_field', 'atmosphere', 'wind', 'audio'),
     'physics': ('real_time_factor', 'real_time_update_rate', 'max_contacts', 'ode', 'bullet',
                 'simbody', 'dart'),
     'model': ('allow_auto_disable', 'enable_wind'),
@@ -59,14 +60,12 @@ QUIET = {
 # gz-sim's own world systems: they do what this world does anyway, so they are accepted.
 WORLD_SYSTEMS = ('physics', 'sensors', 'imu', 'scene-broadcaster', 'user-commands', 'contact',
                  'navsat', 'forcetorque', 'magnetometer', 'air-pressure', 'altimeter')
-_SYSTEM = re.compile(r'^(?:lib)?(?:gz-sim\d*|ignition-gazebo\d*)-(.+)-system(?:\.so)?$')
 _TRUE, _FALSE = ('true', '1'), ('false', '0')
 
 
 def is_world_system(filename):
     """Tell whether a <plugin> filename is one of gz-sim's own world systems."""
-    match = _SYSTEM.match((filename or '').strip())
-    return bool(match) and match.group(1) in WORLD_SYSTEMS
+    return gz_system(filename) in {f'gz-sim-{name}-system' for name in WORLD_SYSTEMS}
 
 
 class Notes:

@@ -5,7 +5,10 @@ A link without <inertial> has a mass of 1 kg and an identity inertia about its o
 sdformat gives it; a shape's size has SDF's default where it is not written (a box 1 m a side,
 a sphere of radius 1 m...). A mesh is found by the uri rules of paths.py: one that is refused
 refuses the model (AssetError), one that is not there, or of a format the world does not read,
-is left out and named. A plane is infinite, as gz-sim collides with it: scenery only.
+is left out and named. A plane is infinite, as gz-sim collides with it: scenery only. A
+<sensor> is read as a URDF's <gazebo reference> sensor is (urdf/gazebo.py), posed in the link's
+frame: gz-sim's own (no <plugin>) or Gazebo Classic's plugins in it; one of a type the world
+does not simulate is named.
 """
 
 from dataclasses import dataclass
@@ -14,12 +17,14 @@ import os
 import numpy as np
 
 from service_tutorial.sim.description import UrdfError
+from service_tutorial.sim.plugins import kind_of
 from service_tutorial.sim.sdf.elements import boolean, child_text, MAX_INERTIA, MAX_MASS
 from service_tutorial.sim.sdf.elements import MAX_SCALE, name_of, number, numbers
 from service_tutorial.sim.sdf.paths import UriMissing, UriRefused
 from service_tutorial.sim.sdf.poses import compose, IDENTITY, read_pose, relative
 from service_tutorial.sim.urdf.builder import check_size
-from service_tutorial.sim.urdf.gazebo import gazebo_colour
+from service_tutorial.sim.urdf.gazebo import gazebo_colour, sensor_block
+from service_tutorial.sim.urdf.gazebo import sensor_plugin_blocks
 from service_tutorial.sim.urdf.meshes import MESH_FORMATS
 from service_tutorial.sim.validation import AssetError, DescriptionError, quoted
 
@@ -69,6 +74,7 @@ class Link:
     visuals: tuple
     gravity: bool = True
     self_collide: bool = False
+    sensors: tuple = ()  # urdf.gazebo.PluginBlocks of its <sensor>s, each with its sensor
 
 
 class LinkReader:
@@ -106,7 +112,29 @@ class LinkReader:
                     inertia=inertia, collisions=tuple(shapes['collision']),
                     visuals=tuple(shapes['visual']),
                     gravity=boolean(element, 'gravity', True, what),
-                    self_collide=boolean(element, 'self_collide', self_collide, what))
+                    self_collide=boolean(element, 'self_collide', self_collide, what),
+                    sensors=self._sensors(element, name, pose, what))
+
+    def _sensors(self, element, link_name, link_pose, what):
+        """Return the PluginBlocks of a link's <sensor>s, naming those not simulated."""
+        blocks = []
+        for child in element.findall('sensor'):
+            sensor_name = name_of(child, what)
+            shown = f'sensor {quoted(sensor_name)} of {what}'
+            try:
+                sensor = sensor_block(child, link_name, self._in_link(child.find('pose'),
+                                                                      link_pose, shown))
+            except UrdfError as error:
+                raise DescriptionError(str(error)) from None
+            found = sensor_plugin_blocks(child, sensor)
+            if found is None:
+                self.reading.notes.add(f'<sensor type={quoted(sensor.sensor_type)}>', shown)
+            for block in found or ():
+                if kind_of(block.filename) is None:
+                    self.reading.ignore_plugin(block.filename, shown)
+                else:
+                    blocks.append(block)
+        return tuple(blocks)
 
     def _in_link(self, element, link_pose, asker):
         """Return the pose of a link's element in the link's frame."""

@@ -9,7 +9,9 @@ unless expressed_in). An <include> reads the model of a folder (its model.config
 file) or of a file, by the uri rules of paths.py, through the caller's reader of robot files
 (read_file), each file once per reading; a cycle of includes, nesting deeper than MAX_NESTING
 or more than MAX_INCLUDES includes are refused, naming them. What the world does not simulate
-is named in the reading's notes (elements.py).
+is named in the reading's notes (elements.py). A model's <plugin>s are kept as blocks
+(urdf/gazebo.py) for the plugins the world simulates (gz-sim's systems, Gazebo Classic's
+plugins); one of no kind the world simulates, or of a nested model, is named instead.
 """
 
 import dataclasses
@@ -21,6 +23,7 @@ from lxml import etree
 import numpy as np
 
 from service_tutorial.sim import frames
+from service_tutorial.sim.plugins import kind_of
 from service_tutorial.sim.sdf.elements import boolean, child_text, name_of, Notes, number
 from service_tutorial.sim.sdf.elements import numbers
 from service_tutorial.sim.sdf.links import LinkReader
@@ -29,6 +32,7 @@ from service_tutorial.sim.sdf.paths import NEWEST_VERSION, parse_version
 from service_tutorial.sim.sdf.paths import UriMissing, UriRefused
 from service_tutorial.sim.sdf.poses import compose, FrameGraph, inverse
 from service_tutorial.sim.sdf.poses import read_pose, SCOPE, WORLD_FRAME
+from service_tutorial.sim.urdf.gazebo import plugin_block
 from service_tutorial.sim.urdf.hardened_xml import MAX_MODEL_XML_BYTES, parse_xml
 from service_tutorial.sim.validation import AssetError, DescriptionError, quoted, Reason
 
@@ -81,7 +85,7 @@ class SdfModel:
     links: tuple
     joints: tuple
     canonical_link: str
-    plugins: tuple  # filenames of its <plugin>s, none of them simulated here
+    plugins: tuple  # urdf.gazebo.PluginBlocks of its own <plugin>s of a simulated kind
     element: object  # the <model> it was read from (an include's target)
     version: tuple  # of the file that holds element
     base_dir: str  # that file's folder (None for a text)
@@ -122,6 +126,7 @@ class SdfReading:
         self.paths = paths
         self.read_file = read_file
         self.notes = Notes()
+        self.ignored_plugins = []  # filenames of the <plugin>s not simulated, once each
         self.includes = 0
         self.files = []  # real paths of the files read, includes and model.config
         self._parsed = {}  # real path -> (root, version)
@@ -158,8 +163,11 @@ class SdfReading:
                     graph.nest(model.name, model.graph)
                     nested.append(model)
             elif tag == 'plugin':
-                plugins.append(child.get('filename') or '')
-                self.notes.add(f'<plugin> {quoted(child.get("filename") or "")}', shown)
+                block = plugin_block(child)
+                if kind_of(block.filename) is None:
+                    self.ignore_plugin(block.filename, shown)
+                else:
+                    plugins.append(block)
         graph.canonical_link = self._canonical(element, graph, nested, version, shown)
         reader = LinkReader(self, graph, version, base_dir, static)
         all_links = [reader.link(link, self_collide) for link in links]
@@ -172,11 +180,19 @@ class SdfReading:
                                'it)', f'model {quoted(scope + name + SCOPE + model.name)}')
             all_links += [_moved_link(link, model.name, frame) for link in model.links]
             all_joints += [_moved_joint(joint, model.name, frame) for joint in model.joints]
-            plugins += model.plugins
+            nested_name = quoted(scope + name + SCOPE + model.name)
+            for block in model.plugins:  # its joints' names are its own: not simulated
+                self.ignore_plugin(block.filename, f'nested model {nested_name}')
         return SdfModel(name=name, static=static, pose=None, relative_to='',
                         links=tuple(all_links), joints=tuple(all_joints),
                         canonical_link=graph.canonical_link, plugins=tuple(plugins),
                         element=element, version=version, base_dir=base_dir, graph=graph)
+
+    def ignore_plugin(self, filename, owner):
+        """Name a <plugin> the world does not simulate, of owner ("model 'm'")."""
+        self.notes.add(f'<plugin> {quoted(filename)}', owner)
+        if filename and filename not in self.ignored_plugins:
+            self.ignored_plugins.append(filename)
 
     def placed(self, element, model, version, asker, *, pose_element=None):
         """

@@ -4,12 +4,14 @@ An SDF world read: its physics, its static models (the scenery) and the others (
 A <world> holds <model>s and <include>s (the two built-in Fuel models among them), posed in the
 world frame or relative to the world's <frame>s and models. Its <physics> (the default one,
 else the first) gives the timestep, max_step_size, 0.001 s if it says none as SDF has it; its
-<gravity> the gravity, 0 0 -9.8 if none. Static models become the world's scenery, built where
-they stand; every other model is an entity, spawned from its own SDF (the <model> as written,
-or an include's model with its name and static) at its pose in the world, under its name with
-whitespace made '_' as gz-sim's topics have it. A moving model none of whose collisions is
-left once its missing meshes are left out would fall for ever: it is left out, and named. A
-world has no ground but the one it says: Fuel's Ground Plane, or a plane of its own.
+<gravity> the gravity, 0 0 -9.8 if none; its <spherical_coordinates> where its origin lies on
+the Earth (geodesy.py), for the NavSat sensors of its models. Static models become the world's
+scenery, built where they stand; every other model is an entity, spawned from its own SDF (the
+<model> as written, or an include's model with its name and static) at its pose in the world,
+under its name with whitespace made '_' as gz-sim's topics have it. A moving model none of
+whose collisions is left once its missing meshes are left out would fall for ever: it is left
+out, and named. A world has no ground but the one it says: Fuel's Ground Plane, or a plane of
+its own.
 """
 
 import copy
@@ -17,6 +19,7 @@ from dataclasses import dataclass
 
 from lxml import etree
 
+from service_tutorial.sim.geodesy import SphericalCoordinates
 from service_tutorial.sim.sdf.elements import child_text, is_world_system, name_of, number
 from service_tutorial.sim.sdf.elements import numbers
 from service_tutorial.sim.sdf.paths import SdfPaths
@@ -30,6 +33,9 @@ DEFAULT_GRAVITY = (0.0, 0.0, -9.8)
 MAX_STEP = 0.1  # s, the longest step the world takes (its timestep parameter's bound)
 MAX_GRAVITY = 1000.0  # m/s^2 along any axis
 MAX_MODELS = 1000  # of one world
+# The surface and the axes of <spherical_coordinates> that gz-sim's NavSat computes with.
+EARTH_SURFACE = 'EARTH_WGS84'
+EAST_NORTH_UP = 'ENU'
 TAG = 'sdf'  # every SDF world's tag, in the world's listing
 
 
@@ -57,6 +63,7 @@ class SdfWorld:
     left_out: tuple = ()  # names of the moving models left out: nothing of them collides
     files: tuple = ()  # the files it was read from, includes and model.config
     version: tuple = (1, 11)  # its SDF's
+    spherical_coordinates: object = None  # a geodesy.SphericalCoordinates, or None
 
 
 def world_name(root, what):
@@ -83,6 +90,8 @@ def read_sdf_world(text, what, base_dir, package_resolver, read_file):
         if not is_world_system(plugin.get('filename')):
             reading.notes.add(f'<plugin> {quoted(plugin.get("filename") or "")}', shown)
     timestep, gravity = _physics(element, shown)
+    spherical = _spherical_coordinates(element.find('spherical_coordinates'), shown,
+                                       reading.notes)
     graph = FrameGraph(name, shown, root=WORLD_FRAME)
     models = []
     for child in element:
@@ -127,7 +136,8 @@ def read_sdf_world(text, what, base_dir, package_resolver, read_file):
     return SdfWorld(name=name, timestep=timestep, gravity=gravity,
                     static_models=tuple(static_models), entities=tuple(entities),
                     not_simulated=tuple(reading.notes), left_out=tuple(left_out),
-                    files=tuple(dict.fromkeys(reading.files)), version=version)
+                    files=tuple(dict.fromkeys(reading.files)), version=version,
+                    spherical_coordinates=spherical)
 
 
 def _top_model(reading, element, version, base_dir, shown):
@@ -164,6 +174,24 @@ def _physics(world, shown):
     if text:
         gravity = tuple(numbers(text, 3, f'<gravity> of {shown}', limit=MAX_GRAVITY))
     return timestep, gravity
+
+
+def _spherical_coordinates(element, shown, notes):
+    """Return the SphericalCoordinates of a world's <spherical_coordinates>, or None."""
+    if element is None:
+        return None
+    what = f'<spherical_coordinates> of {shown}'
+    for tag, supported in (('surface_model', EARTH_SURFACE),
+                           ('world_frame_orientation', EAST_NORTH_UP)):
+        text = child_text(element, tag)
+        if text and text != supported:
+            notes.add(f'<{tag}> {quoted(text)} (taken as {supported})', what)
+    return SphericalCoordinates(
+        latitude_deg=number(element, 'latitude_deg', 0.0, what, minimum=-90.0, maximum=90.0),
+        longitude_deg=number(element, 'longitude_deg', 0.0, what, minimum=-180.0,
+                             maximum=180.0),
+        elevation=number(element, 'elevation', 0.0, what, minimum=-1e7, maximum=1e7),
+        heading_deg=number(element, 'heading_deg', 0.0, what, minimum=-360.0, maximum=360.0))
 
 
 def _entity_text(model, name, element_static):

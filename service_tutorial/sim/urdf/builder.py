@@ -100,8 +100,9 @@ def load_urdf(model_xml, *, base_dir=None, package_resolver=None, timestep=0.002
     builder = _SpecBuilder(urdf.robot, base_dir, package_resolver, read_link_settings(root),
                            timestep)
     description = builder.build()
-    setups, plugin_notes = _plugin_setups(
-        read_plugin_blocks(root) + read_sensor_plugin_blocks(root), urdf.robot)
+    sensor_blocks, sensor_notes = read_sensor_plugin_blocks(root)
+    setups, plugin_notes = plugins.configure_plugins(read_plugin_blocks(root) + sensor_blocks,
+                                                     urdf.robot)
     for setup in setups:
         plugins.plugin_class(setup.kind).build(description.spec, setup.config, timestep)
     missing = _missing_meshes(root, builder.meshes.missing)
@@ -110,7 +111,7 @@ def load_urdf(model_xml, *, base_dir=None, package_resolver=None, timestep=0.002
     notes = ([f"mesh '{filename}' cannot be had, so it is left out: {reason}"
               for filename, reason in missing]
              + builder.notes + [f"plugin '{filename}' is not simulated here; it is ignored"
-                                for filename in ignored] + plugin_notes)
+                                for filename in ignored] + sensor_notes + plugin_notes)
     return dataclasses.replace(
         description, plugins=setups,
         actuators=tuple(actuator.name for actuator in description.spec.actuators),
@@ -170,29 +171,6 @@ def check_size(size, count, what, across):
     if extent > MAX_SIZE:
         raise UrdfError(f'{what} {size.tolist()}: the shape is {extent:g} m across, more '
                         f'than the limit of {MAX_SIZE:g} m')
-
-
-def _plugin_setups(blocks, robot):
-    """
-    Configure every plugin block of a registered kind; return the setups and their notes.
-
-    A robot may carry one plugin of a single kind, and one drive of any kind.
-    """
-    setups, notes = [], []
-    for block in blocks:
-        kind = plugins.kind_of(block.filename)
-        if kind is None:
-            continue
-        plugin = plugins.plugin_class(kind)
-        if plugin.single and any(setup.kind == kind for setup in setups):
-            raise UrdfError(f'model_xml carries more than one {plugin.title} plugin')
-        if plugin.is_drive and any(plugins.plugin_class(setup.kind).is_drive
-                                   for setup in setups):
-            raise UrdfError(f'model_xml carries a {plugin.title} plugin besides another drive')
-        config = plugin.configure(block, robot)
-        notes.extend(getattr(config, 'notes', ()))
-        setups.append(plugins.PluginSetup(kind, block, config))
-    return tuple(setups), notes
 
 
 def _pose(matrix, what):

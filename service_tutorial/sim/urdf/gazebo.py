@@ -5,6 +5,10 @@ A plugin block is kept as written (its parameters, its <ros> settings): the plug
 parses what the simulation needs, and a ROS face reads its topic settings from the same block.
 A sensor's plugin (<gazebo reference="link"><sensor><plugin>) also carries its SensorBlock:
 the link, the sensor's pose and update rate, and the texts of its <ray>, <camera> or <imu>.
+A <sensor> with no <plugin> is gz-sim's (Gazebo Harmonic's): its world's systems simulate it
+and publish on its gz topic, so it becomes a block of its own, of the kind its type names
+(plugins.sensor_kind). SDF's reader takes its <plugin>s and <sensor>s through the same
+functions.
 """
 
 from dataclasses import dataclass
@@ -13,6 +17,7 @@ import types
 
 import mujoco
 import numpy as np
+from service_tutorial.sim import plugins
 from service_tutorial.sim.description import check_update_rate
 from service_tutorial.sim.description import parse_numbers
 from service_tutorial.sim.description import UrdfError
@@ -92,11 +97,11 @@ def read_plugin_blocks(root):
     for gazebo in root.findall('gazebo'):
         if gazebo.get('reference') is not None:
             continue
-        blocks.extend(_plugin_block(plugin) for plugin in gazebo.findall('plugin'))
+        blocks.extend(plugin_block(plugin) for plugin in gazebo.findall('plugin'))
     return tuple(blocks)
 
 
-def _plugin_block(plugin, sensor=None):
+def plugin_block(plugin, sensor=None):
     """Read one <plugin>: its parameters by tag and its <ros> settings."""
     parameters = {}
     for element in plugin:
@@ -160,27 +165,58 @@ def _number(sensor_name, values, path, default, minimum=-math.inf, above=None, w
 
 
 def read_sensor_plugin_blocks(root):
-    """Return a PluginBlock, with its SensorBlock, for every <plugin> of a link's <sensor>."""
+    """
+    Return the blocks of the <sensor>s of the <gazebo reference="link"> blocks, and notes.
+
+    A sensor's <plugin>s are Gazebo Classic's, each a block with the SensorBlock; a sensor
+    with none is gz-sim's, one block of its own (see sensor_plugin_blocks). The notes name the
+    sensors of no kind the world simulates.
+    """
     link_names = {link.get('name') for link in root.findall('link')}
-    blocks = []
+    blocks, notes = [], []
     for gazebo in root.findall('gazebo'):
         link = gazebo.get('reference')
         if link is None:
             continue
         for element in gazebo.findall('sensor'):
-            plugins = element.findall('plugin')
-            if not plugins:
-                continue  # Gazebo would run it, but nothing would publish what it measures
-            sensor = _sensor_block(element, link)
+            sensor = sensor_block(element, link)
             if link not in link_names:
                 raise UrdfError(f'sensor {quoted(sensor.name)} is on link {quoted(link)}, '
                                 'which is not a link of the robot')
-            blocks.extend(_plugin_block(plugin, sensor) for plugin in plugins)
-    return tuple(blocks)
+            found = sensor_plugin_blocks(element, sensor)
+            if found is None:
+                notes.append(f'sensor {quoted(sensor.name)} of type '
+                             f'{quoted(sensor.sensor_type)} is not simulated here; it is '
+                             'ignored')
+            blocks.extend(found or ())
+    return tuple(blocks), notes
 
 
-def _sensor_block(element, link):
-    """Read a <sensor>: its type, name, update rate, pose and the texts below it."""
+def sensor_plugin_blocks(element, sensor):
+    """
+    Return the PluginBlocks of a <sensor> read into a SensorBlock, or None if it has none.
+
+    Its <plugin>s are Gazebo Classic's and carry the sensor (registered or not: the builder
+    names those it does not simulate); a sensor with no plugin is gz-sim's, simulated by its
+    world's systems as the kind of its type, if the world simulates that type.
+    """
+    found = element.findall('plugin')
+    if found:
+        return tuple(plugin_block(plugin, sensor) for plugin in found)
+    kind = plugins.sensor_kind(sensor.sensor_type)
+    if kind is None:
+        return None
+    return (PluginBlock(filename=kind, name=sensor.name, parameters=types.MappingProxyType({}),
+                        sensor=sensor),)
+
+
+def sensor_block(element, link, pose=None):
+    """
+    Read a <sensor>: its type, name, update rate, pose and the texts below it.
+
+    pose: (position, orientation (w, x, y, z)) in the link's frame, as SDF's frames resolve
+    it; None: the <pose> is six numbers, x y z roll pitch yaw, as a URDF writes it.
+    """
     name = (element.get('name') or '').strip()
     values = {}
     for child in element.iter():
@@ -199,18 +235,21 @@ def _sensor_block(element, link):
             values.setdefault(f'{path}/{attribute}', text.strip())
         if not len(child):
             values[path] = (child.text or '').strip()
-    pose_text = values.get('pose', '0 0 0 0 0 0')
-    pose = parse_numbers(pose_text, f'sensor {quoted(name)} <pose>')
-    if len(pose) != 6:
-        raise UrdfError(f'sensor {quoted(name)} <pose> must be six numbers '
-                        f'(x y z roll pitch yaw): {quoted(pose_text)}')
-    orientation = np.zeros(4)
-    mujoco.mju_euler2Quat(orientation, np.array(pose[3:]), 'XYZ')  # URDF's and SDF's rpy
+    if pose is None:
+        pose_text = values.get('pose', '0 0 0 0 0 0')
+        numbers = parse_numbers(pose_text, f'sensor {quoted(name)} <pose>')
+        if len(numbers) != 6:
+            raise UrdfError(f'sensor {quoted(name)} <pose> must be six numbers '
+                            f'(x y z roll pitch yaw): {quoted(pose_text)}')
+        orientation = np.zeros(4)
+        mujoco.mju_euler2Quat(orientation, np.array(numbers[3:]), 'XYZ')  # URDF's and SDF's rpy
+        pose = (numbers[:3], orientation)
     return SensorBlock(
         link=link, sensor_type=(element.get('type') or '').strip(), name=name,
         update_rate=check_update_rate(_number(name, values, 'update_rate', 0.0, minimum=0.0),
                                       f'sensor {quoted(name)} <update_rate>'),
-        position=tuple(pose[:3]), orientation=tuple(orientation.tolist()),
+        position=tuple(float(value) for value in pose[0]),
+        orientation=tuple(float(value) for value in pose[1]),
         values=types.MappingProxyType(values))
 
 
