@@ -16,6 +16,7 @@ import numpy as np
 import pytest
 from repository import TEST_MODELS
 from service_tutorial.sim.description_formats import FORMATS
+from service_tutorial.sim.plugins.gz_diff_drive import GzDiffDrive
 from service_tutorial.sim.robot_files import read_uri
 from service_tutorial.sim.world import World
 from service_tutorial.testing.spawns import spawn_file, spawn_robot
@@ -133,7 +134,7 @@ def test_the_rovers_joint_axes_limits_and_dynamics():
         world.model.body_weldid[body(world, 'rover::chassis')]
 
 
-def test_the_rover_stands_where_it_was_asked_and_names_its_plugin_as_not_simulated():
+def test_the_rover_stands_where_it_was_asked_and_carries_its_diff_drive():
     world = World()
     yaw = 0.7
     rover = spawn_file(world, 'rover', ROVER, position=(-1.5, 0.5, 0.0),
@@ -144,10 +145,10 @@ def test_the_rover_stands_where_it_was_asked_and_names_its_plugin_as_not_simulat
     assert state.orientation == pytest.approx([math.cos(yaw / 2), 0.0, 0.0,
                                                math.sin(yaw / 2)], abs=2e-3)
     description = rover.description
-    assert description.ignored_plugins == ('gz-sim-diff-drive-system',)
-    assert description.notes == ("not simulated, ignored: <plugin> 'gz-sim-diff-drive-system'"
-                                 " of model 'rover'",)
-    assert not rover.plugins
+    assert description.ignored_plugins == () and description.notes == ()
+    (drive,) = rover.plugins
+    assert isinstance(drive, GzDiffDrive)
+    assert (drive.config.wheel_separation, drive.config.wheel_radius) == (0.4, 0.08)
 
 
 # --- the pavilion: a static model folder by model://, DAE meshes, cylinders ----------------

@@ -85,8 +85,10 @@ def test_an_sdf_world_is_listed_loaded_unloaded_and_loaded_again(world):
     assert column == pytest.approx([2.7, 1.8, 1.1])
     assert 'scenery/ground_plane::link' in bodies and 'ground_plane' not in {
         model.geom(index).name for index in range(model.ngeom)}
-    # The rover's plugin is named, not simulated.
-    assert 'gz-sim-diff-drive-system' in response.result.error_message
+    # The rover's DiffDrive is simulated; the world's WindEffects system is named, not.
+    assert 'gz-sim-diff-drive-system' not in response.result.error_message
+    assert "<plugin> 'gz-sim-wind-effects-system' of world 'plaza'" in \
+        response.result.error_message
 
     step(world, 250)  # one second: the crate falls on the Ground Plane, the rover stays
     assert position_of(world, 'crate') == pytest.approx((0.0, -2.0, 0.1), abs=2e-3)
@@ -161,7 +163,8 @@ def test_get_spawnables_offers_the_sdf_model_folders(world):
     offered = {spawnable.uri: spawnable for spawnable in response.spawnables}
     rover = offered['package://sdf_pkg/models/rover']
     assert rover.description.startswith('rover:')
-    assert 'plugins not simulated: gz-sim-diff-drive-system' in rover.description
+    assert 'a DiffDrive system' in rover.description and 'not simulated' not in \
+        rover.description
     pavilion = offered['package://sdf_pkg/models/pavilion']
     assert 'fixed to the world' in pavilion.description
     lower, upper = ((point.x, point.y, point.z) for point in pavilion.spawn_bounds.points)
@@ -356,6 +359,6 @@ def test_every_hostile_sdf_world_is_refused_and_nothing_changes(world, hostile_p
 def test_unsupported_sdf_elements_are_refused_only_when_asked(world):
     refused = load(world, PLAZA, fail_on_unsupported_element=True)
     assert refused.result.result == LoadWorld.Response.UNSUPPORTED_ELEMENTS
-    assert "<plugin> 'gz-sim-diff-drive-system' of model 'scout'" in \
+    assert "<plugin> 'gz-sim-wind-effects-system' of world 'plaza'" in \
         refused.result.error_message
     assert current(world).world.name == 'yard'

@@ -33,6 +33,11 @@ KINDS = {
     'gazebo_ros_imu': _MODULE + 'imu_sensor',
     'gazebo_ros_joint_state_publisher': _MODULE + 'joint_state_publisher',
     # gz-sim's systems, by their library's name.
+    'gz-sim-diff-drive-system': _MODULE + 'gz_diff_drive',
+    'gz-sim-joint-state-publisher-system': _MODULE + 'gz_joint_state_publisher',
+    'gz-sim-odometry-publisher-system': _MODULE + 'gz_odometry_publisher',
+    'gz-sim-joint-position-controller-system': _MODULE + 'gz_joint_position_controller',
+    'gz-sim-joint-controller-system': _MODULE + 'gz_joint_controller',
 }
 # gz-sim's sensors, by <sensor type> (sdformat's aliases beside the names): their kinds are
 # GZ_SENSOR + the type, each matched whole.

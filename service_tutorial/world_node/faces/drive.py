@@ -44,8 +44,8 @@ class DriveFace(PluginFace):
 
     @classmethod
     def applies_to(cls, plugin):
-        """Tell whether a plugin is a drive."""
-        return plugin.is_drive
+        """Tell whether a plugin is a gazebo_ros drive (a diff drive or skid steer)."""
+        return isinstance(plugin, DiffDrive)
 
     def __init__(self, node, world, model, plugin, namespace):
         """Name the drive's topics; namespace is the model's, normalised ('' or '/a/b')."""

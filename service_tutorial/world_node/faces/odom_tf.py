@@ -10,6 +10,7 @@ one turn go out in one TFMessage; the face has no topic of its own to destroy.
 
 from geometry_msgs.msg import TransformStamped
 from service_tutorial.conversions import fill_time_msg, fill_transform_msg
+from service_tutorial.sim.plugins.diff_drive import DiffDrive
 from service_tutorial.world_node.faces.face import PluginFace
 from service_tutorial.world_node.pacing import ODOMETRY_STREAM
 
@@ -21,8 +22,8 @@ class OdomTfFace(PluginFace):
 
     @classmethod
     def applies_to(cls, plugin):
-        """Tell whether a plugin is a drive that asks for its odometry on /tf."""
-        return plugin.is_drive and plugin.config.publish_odom_tf
+        """Tell whether a plugin is a gazebo_ros drive that asks for its odometry on /tf."""
+        return isinstance(plugin, DiffDrive) and plugin.config.publish_odom_tf
 
     def __init__(self, node, world, model, plugin, namespace):
         """Send through the node's TransformBatch (node.tf_batch), whatever the namespace."""
