@@ -21,6 +21,7 @@ from service_tutorial.sim.background_renders import BackgroundRenders
 from service_tutorial.sim.core_logs import core_logger
 from service_tutorial.sim.description_cache import DescriptionCache
 from service_tutorial.sim.model import Model
+from service_tutorial.sim.plugins.gz_names import DEFAULT_WORLD_NAME
 from service_tutorial.sim.recovery import Recovery
 from service_tutorial.sim.recovery import take_steps
 from service_tutorial.sim.scenery import Scenery
@@ -31,8 +32,6 @@ from service_tutorial.sim.validation import WorldError
 
 # The world's log: one name for everything that happens to its models.
 WORLD_LOG = 'service_tutorial.world'
-# gz-sim's name for a world that names none; gz topics of sensors name their world.
-DEFAULT_WORLD_NAME = 'default'
 # MuJoCo's warnings are the process's: one log for them, whichever world they come from.
 _mujoco_logger = core_logger(WORLD_LOG)
 

@@ -14,6 +14,8 @@ ros_gz_bridge writes with '/' for '::' (tb3/imu_link/tb3_imu).
 """
 
 SCOPE = '::'
+# gz-sim's name for a world that names none, which gz topics of sensors then name.
+DEFAULT_WORLD_NAME = 'default'
 # The longest name gz-transport takes (kMaxNameLength).
 MAX_TOPIC_LENGTH = 65535
 _DROPPED = ('@', '~', '//', ':=')
