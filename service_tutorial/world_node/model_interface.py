@@ -12,12 +12,9 @@ eight for tinybot, where MuJoCo attaches it in about 1 ms). From then on the nod
 interface what concerns its faces at each tick.
 """
 
-from rclpy.exceptions import InvalidTopicNameException
-from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
-from rclpy.validate_full_topic_name import validate_full_topic_name
-from service_tutorial.sim.validation import quoted
-from service_tutorial.sim.validation import WorldError
 from service_tutorial.world_node.faces import FACES
+from service_tutorial.world_node.faces.gz_face import GzFace
+from service_tutorial.world_node.ros_names import check_topic
 from service_tutorial.world_node.tf_publishing import RobotDescriptionPublisher
 
 
@@ -44,7 +41,7 @@ class ModelInterface:
                 self.description = RobotDescriptionPublisher(node, namespace, urdf)
             for part in self._parts():
                 for topic in part.topics:
-                    _check_topic(node, model.name, topic)
+                    check_topic(node, model.name, topic)
         except Exception:
             self.destroy()
             raise
@@ -71,6 +68,15 @@ class ModelInterface:
         self.watchers = [watcher for face in self.faces for watcher in face.watchers]
         self._commanded = [face for face in self.faces if face.takes_commands]
 
+    def remake_gz_topics(self):
+        """Serve the gz faces' topics as the node's bridge says now (made, or still to make)."""
+        for face in self.faces:
+            if isinstance(face, GzFace):
+                if self.topics_made:
+                    face.remake_topics()
+                else:
+                    face.served = face.serve()
+
     def publish(self, stream, now):
         """Publish each plugin's part of a stream that fell due at simulation time now."""
         for face in self._publishing.get(stream, ()):
@@ -87,13 +93,3 @@ class ModelInterface:
             part.destroy()
         self.faces, self.description = [], None
         self._publishing, self.watchers, self._commanded = {}, [], []
-
-
-def _check_topic(node, model_name, topic):
-    """Refuse a topic name that the node could not make, as the world refuses a model."""
-    try:
-        validate_full_topic_name(node.resolve_topic_name(topic))
-    except (InvalidTopicNameException, _rclpy.RCLError) as error:
-        reason = str(error).partition(', at /')[0]  # rcl's source file says nothing more
-        raise WorldError(f'topic {quoted(topic)} of model {quoted(model_name)} is not a valid '
-                         f'ROS topic name here: {reason}') from None

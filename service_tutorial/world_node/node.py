@@ -35,6 +35,7 @@ from service_tutorial.sim.validation import quoted
 from service_tutorial.sim.validation import WorldError
 from service_tutorial.world_node.camera_stream import CAMERA_PARAMETERS, CameraStream
 from service_tutorial.world_node.gazebo_services import GazeboServices
+from service_tutorial.world_node.gz_bridge import GzBridge
 from service_tutorial.world_node.log_forwarding import forward_core_logs
 from service_tutorial.world_node.model_interface import ModelInterface
 from service_tutorial.world_node.pacing import CLOCK_STREAM, JOINT_STATES_STREAM
@@ -142,6 +143,8 @@ class MujocoWorld(Node):
                                     for stream, name in RATE_PARAMETERS.items()})
         self._clock_msg = Clock()
         self.models = {}  # name -> ModelInterface, in spawn order
+        # How the gz-sim systems' and sensors' gz topics are served on ROS (set_gz_bridge).
+        self.gz_bridge = GzBridge()
         self._topics_to_make = []  # interfaces of models spawned, topics made once answered
         # Made after the service callback that spawned returns, before the next step.
         self._topics_due = self.create_guard_condition(self.make_model_topics)
@@ -365,6 +368,17 @@ class MujocoWorld(Node):
         self.world.delete_model(name)
         self.forget_model(name)
         self.viewer.reopen()
+
+    def set_gz_bridge(self, bridge):
+        """
+        Serve the gz topics as a GzBridge says from now on, those of the robots there too.
+
+        Every gz face destroys its topics and makes them again under the bridge's names and
+        types; the robots run on. Call it from the node's executor (a callback of the node).
+        """
+        self.gz_bridge = bridge
+        for interface in self.models.values():
+            interface.remake_gz_topics()
 
     def holding_time(self, operation):
         """Return operation, made to hold simulation time for as long as it runs."""

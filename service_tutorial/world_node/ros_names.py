@@ -2,6 +2,9 @@
 
 import re
 
+from rclpy.exceptions import InvalidTopicNameException
+from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
+from rclpy.validate_full_topic_name import validate_full_topic_name
 from service_tutorial.sim.validation import quoted
 from service_tutorial.sim.validation import Reason
 from service_tutorial.sim.validation import WorldError
@@ -82,3 +85,13 @@ def _expand(name, namespace, node, block):
         raise WorldError(f'plugin {quoted(block.name)} names topic {quoted(name)}, which is '
                          'not a valid ROS topic name')
     return expanded
+
+
+def check_topic(node, model_name, topic):
+    """Refuse a topic name that the node could not make, as the world refuses a model."""
+    try:
+        validate_full_topic_name(node.resolve_topic_name(topic))
+    except (InvalidTopicNameException, _rclpy.RCLError) as error:
+        reason = str(error).partition(', at /')[0]  # rcl's source file says nothing more
+        raise WorldError(f'topic {quoted(topic)} of model {quoted(model_name)} is not a valid '
+                         f'ROS topic name here: {reason}') from None

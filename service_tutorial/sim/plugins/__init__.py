@@ -145,6 +145,9 @@ class Plugin:
     title = 'plugin'
     # A drive takes velocity commands: command_velocity(), odometry(); a robot has one.
     is_drive = False
+    # A gz-sim system or sensor: its topics are gz topics (gz_topics()), served on ROS as the
+    # world's bridge says; a Gazebo Classic plugin's are ROS topics of its own.
+    is_gz_system = False
 
     def __init__(self, config, block):
         """Keep the configuration parsed from the plugin's block, and the block itself."""

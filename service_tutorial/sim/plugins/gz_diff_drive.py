@@ -97,6 +97,7 @@ class GzDiffDrive(Plugin):
 
     title = 'DiffDrive system'
     is_drive = True
+    is_gz_system = True
 
     def __init__(self, config, block):
         """Start at rest, with no command and odometry at the origin."""

@@ -89,6 +89,7 @@ class JointCommand(Plugin):
 
     single = False
     suffix = 'cmd_vel'  # the end of gz's default topic
+    is_gz_system = True
 
     def __init__(self, config, block):
         """Start at the initial command."""

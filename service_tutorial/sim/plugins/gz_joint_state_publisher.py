@@ -30,6 +30,7 @@ class GzJointStatePublisher(JointStatePublisher):
     """Picks the named joints' states, forces too, out of its model's."""
 
     title = 'JointStatePublisher system'
+    is_gz_system = True
 
     @classmethod
     def configure(cls, block, robot):

@@ -74,6 +74,7 @@ class GzOdometryPublisher(Plugin):
     """A model's ground-truth odometry, handed to its listener at gz's rate."""
 
     title = 'OdometryPublisher system'
+    is_gz_system = True
 
     def __init__(self, config, block):
         """Start with no listener and nothing due."""

@@ -22,8 +22,8 @@ class JointStatesFace(PluginFace):
 
     @classmethod
     def applies_to(cls, plugin):
-        """Tell whether a plugin is a joint state publisher."""
-        return isinstance(plugin, JointStatePublisher)
+        """Tell whether a plugin is gazebo_ros's joint state publisher (gz's has its own face)."""
+        return isinstance(plugin, JointStatePublisher) and not plugin.is_gz_system
 
     def __init__(self, node, world, model, plugin, namespace):
         """Name the topic; namespace is the model's, normalised ('' or '/a/b')."""

@@ -50,8 +50,8 @@ class SensorFace(PluginFace):
 
     @classmethod
     def applies_to(cls, plugin):
-        """Tell whether a plugin is a sensor of this face's kind."""
-        return isinstance(plugin, cls.sensor_type)
+        """Tell whether a plugin is a sensor of this face's kind (gz's have faces of their own)."""
+        return isinstance(plugin, cls.sensor_type) and not plugin.is_gz_system
 
     def __init__(self, node, world, model, plugin, namespace):
         """Start with no topics; each kind names its own and makes them with publisher()."""
