@@ -79,12 +79,25 @@ def _gl_context_class():
     raise RuntimeError('this MuJoCo has no GL context to render offscreen with')
 
 
+def linear_depth(buffer, near, far):
+    """
+    Return the distances along the optical axis (m) of a depth buffer drawn with near and far.
+
+    MuJoCo's buffer holds OpenGL's window depth of each pixel, 0 at near and 1 at far, where
+    nothing was drawn; nothing drawn reads inf.
+    """
+    distances = (near * far / (far - buffer * (far - near))).astype(np.float32)
+    distances[buffer >= 1.0] = np.inf
+    return distances
+
+
 class SceneSnapshot:
     """A model's scene as one camera sees it, copied to be drawn later, maybe on another thread."""
 
     def __init__(self):
         self.model = None  # the model the scene was copied from
         self.scene = None
+        self.near = self.far = None  # the clipping distances it was taken with, in m
         self._option = mujoco.MjvOption()
 
     def take(self, model, data, camera, fovy, near, far):
@@ -105,6 +118,7 @@ class SceneSnapshot:
             fixed.type = mujoco.mjtCamera.mjCAMERA_FIXED
             fixed.fixedcamid = int(camera)
             camera = fixed
+        self.near, self.far = near, far
         mujoco.mjv_updateScene(model, data, self._option, None, camera,
                                mujoco.mjtCatBit.mjCAT_ALL, self.scene)
         # MuJoCo takes the field of view and the clipping distances from the model (a free
@@ -132,8 +146,13 @@ class Drawing:
         self._model = None  # the world's model the rendering context was made for
         self._buffer = (0, 0)  # its offscreen buffer's width and height
 
-    def draw(self, snapshot, width, height):
-        """Draw a SceneSnapshot as an (height, width, 3) uint8 RGB image."""
+    def draw(self, snapshot, width, height, *, depth=False):
+        """
+        Draw a SceneSnapshot as an (height, width, 3) uint8 RGB image.
+
+        depth: return (image, depth) instead, depth being each pixel's distance along the
+        optical axis, in m, as (height, width) float32: inf where nothing was drawn.
+        """
         self.make_gl_context()
         self._gl_context.make_current()
         try:
@@ -142,10 +161,18 @@ class Drawing:
                 self._make_context(snapshot.model, width, height)
             rect = mujoco.MjrRect(0, 0, width, height)
             mujoco.mjr_setBuffer(mujoco.mjtFramebuffer.mjFB_OFFSCREEN, self._context)
+            # With depth, no sky (nothing there reads inf) and no reflective floor, which is
+            # drawn over the mirrored scene without depth.
+            for flag in (mujoco.mjtRndFlag.mjRND_SKYBOX, mujoco.mjtRndFlag.mjRND_REFLECTION):
+                snapshot.scene.flags[flag] = not depth
             mujoco.mjr_render(rect, snapshot.scene, self._context)
             pixels = np.empty((height, width, 3), dtype=np.uint8)
-            mujoco.mjr_readPixels(pixels, None, rect, self._context)
-            return np.ascontiguousarray(pixels[::-1])  # GL's rows go bottom up
+            buffer = np.empty((height, width), dtype=np.float32) if depth else None
+            mujoco.mjr_readPixels(pixels, buffer, rect, self._context)
+            image = np.ascontiguousarray(pixels[::-1])  # GL's rows go bottom up
+            if not depth:
+                return image
+            return image, linear_depth(buffer[::-1], snapshot.near, snapshot.far)
         finally:
             release_gl_context(self._gl_context)
 
@@ -222,13 +249,17 @@ class OffscreenCamera:
         """Copy the scene as render_view() would see it; render_snapshot() draws it later."""
         self.snapshot.take(model, data, camera, fovy, near, far)
 
-    def render_snapshot(self, drawing=None):
-        """Draw the last snapshot with a Drawing (the camera's own by default), on any thread."""
+    def render_snapshot(self, drawing=None, *, depth=False):
+        """
+        Draw the last snapshot with a Drawing (the camera's own by default), on any thread.
+
+        depth: return (image, depth) as Drawing.draw does.
+        """
         if drawing is None:
             if self.drawing is None:
                 self.drawing = Drawing()
             drawing = self.drawing
-        return drawing.draw(self.snapshot, self.width, self.height)
+        return drawing.draw(self.snapshot, self.width, self.height, depth=depth)
 
     def close(self):
         """Release the camera's own Drawing and its GL context; the next render makes new ones."""

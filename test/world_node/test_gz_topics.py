@@ -17,7 +17,8 @@ import numpy as np
 import pytest
 from rclpy.node import Node
 from repository import read_file, TEST_MODELS
-from sensor_msgs.msg import JointState
+from sensor_msgs.msg import Image, Imu, JointState, LaserScan, NavSatFix, PointCloud2
+from sensor_msgs.msg import PointField
 from service_tutorial.conversions import seconds_of
 from service_tutorial.world_node.gz_bridge import BridgedTopic, GzBridge, ROS_TO_GZ
 from tf2_msgs.msg import TFMessage
@@ -31,6 +32,9 @@ SURVEYOR = os.path.join(SDF, 'models', 'surveyor', 'model.sdf')
 BURGER = os.path.join(SDF, 'models', 'burger', 'model.sdf')
 GZBOT = os.path.join(TEST_MODELS, 'gzbot.urdf')
 TIMESTEP = 0.001  # the world's max_step_size
+WALL = 2.0  # m, x of the wall's face
+ORIGIN = (48.8584, 2.2945, 35.0)  # the world's <spherical_coordinates>
+SURVEYOR_SENSORS = '/world/proving_ground/model/surveyor/link/chassis/sensor/'
 
 
 def steps(seconds):
@@ -135,3 +139,136 @@ def test_joint_states_odometry_and_tf_in_the_declared_frames(world, name, path, 
     period = 0.02 if name == 'surveyor' else 1.0 / 30.0
     stamps = [seconds_of(msg.header.stamp) for msg in odometry]
     assert np.diff(stamps) == pytest.approx([period] * (len(stamps) - 1), abs=TIMESTEP * 1.01)
+
+
+def cloud_points(cloud):
+    """Return a PointCloud2's points as a numpy structured array (float32 and uint16 fields)."""
+    kinds = {PointField.FLOAT32: '<f4', PointField.UINT16: '<u2'}
+    dtype = np.dtype({'names': [field.name for field in cloud.fields],
+                      'formats': [kinds[field.datatype] for field in cloud.fields],
+                      'offsets': [field.offset for field in cloud.fields],
+                      'itemsize': cloud.point_step})
+    return np.frombuffer(bytes(cloud.data), dtype=dtype)
+
+
+def reading_after(world, received, stamp):
+    """
+    Step until a reading stamped at stamp or later comes; return it.
+
+    Stepped on request, the world holds each sensor to its rate in wall time too
+    (faces/sensor.py): a 5 Hz lidar scans once per 0.2 s of wall time, however fast the steps.
+    """
+    def came():
+        if not (received and seconds_of(received[-1].header.stamp) >= stamp - 1e-9):
+            world.step(steps(0.1))
+            return False
+        return True
+    assert world.wait_for(came, timeout=30.0), f'no reading after {stamp} s'
+    return received[-1]
+
+
+def latest(world, msg_type, topic, seconds=0.5):
+    """Listen to a topic for some seconds of simulation time; return the last message."""
+    received = world.listener.listen(msg_type, topic)
+    world.step(steps(seconds))
+    # A camera draws in the background: its frame comes once drawn, a tick of the world later.
+    assert world.wait_for(lambda: received), f'nothing on {topic}'
+    return received[-1]
+
+
+def test_a_gz_lidar_reads_the_wall_on_its_default_topic(world):
+    spawn(world, 'surveyor', SURVEYOR)
+    scan = latest(world, LaserScan, SURVEYOR_SENSORS + 'front_lidar/scan')
+    assert scan.header.frame_id == 'surveyor/chassis/front_lidar'
+    assert len(scan.ranges) == 181 and scan.angle_increment == pytest.approx(math.pi / 180)
+    assert (scan.range_min, scan.range_max) == pytest.approx((0.1, 8.0))
+    expected = WALL - (world.entity_state('surveyor').pose.position.x + 0.1)
+    print(f'\nsurveyor gpu_lidar: the wall {expected:.4f} m ahead reads {scan.ranges[90]:.4f} m')
+    assert scan.ranges[90] == pytest.approx(expected, abs=0.02)
+    assert scan.ranges[90] != pytest.approx(expected, abs=1e-4)  # its declared noise
+
+
+def test_a_depth_cameras_centre_pixel_reads_the_wall(world):
+    spawn(world, 'surveyor', SURVEYOR)
+    topic = SURVEYOR_SENSORS + 'depth/depth_image'
+    points = world.listener.listen(PointCloud2, topic + '/points')
+    image = latest(world, Image, topic, seconds=0.5)
+    assert (image.width, image.height, image.encoding) == (64, 48, '32FC1')
+    depth = np.frombuffer(bytes(image.data), dtype=np.float32).reshape(48, 64)
+    expected = WALL - (world.entity_state('surveyor').pose.position.x + 0.15)
+    centre = float(depth[23:25, 31:33].mean())
+    print(f'\nsurveyor depth camera: the wall {expected:.4f} m ahead reads {centre:.4f} m at '
+          'its centre')
+    assert centre == pytest.approx(expected, abs=0.02)
+    assert world.wait_for(lambda: points), 'no points'
+    cloud = points[-1]
+    assert (cloud.height, cloud.width) == (48, 64)
+    points = cloud_points(cloud).reshape(48, 64)
+    # The middle row meets the wall across the image; the bottom rows the floor, nearer.
+    assert points['x'][24] == pytest.approx([expected] * 64, abs=0.02)
+    assert points['y'][24, 0] > 0.9 and points['y'][24, 63] < -0.9  # left is +y
+    assert (points['x'][47] < 0.5).all() and (points['z'][47] < 0.0).all()
+
+
+def test_an_imu_reads_gravity_and_a_navsat_the_worlds_origin(world):
+    spawn(world, 'surveyor', SURVEYOR)
+    imu_topic, navsat_topic = (SURVEYOR_SENSORS + 'imu/imu', SURVEYOR_SENSORS + 'gps/navsat')
+    fixes = world.listener.listen(NavSatFix, navsat_topic)
+    imu = latest(world, Imu, imu_topic)
+    print(f'\nsurveyor IMU at rest: linear acceleration z {imu.linear_acceleration.z:.4f} '
+          'm/s^2')
+    assert imu.linear_acceleration.z == pytest.approx(9.8, abs=0.05)
+    assert imu.angular_velocity.z == pytest.approx(0.0, abs=0.01)
+    assert abs(imu.orientation.w) == pytest.approx(1.0, abs=1e-3)
+    assert imu.header.frame_id == 'surveyor/chassis/imu'
+    fix = fixes[-1]
+    height = world.entity_state('surveyor').pose.position.z + 0.05
+    print(f'surveyor NavSat at the origin: {fix.latitude:.7f} {fix.longitude:.7f} '
+          f'{fix.altitude:.4f} m')
+    assert fix.header.frame_id == 'gps_link'
+    assert (fix.latitude, fix.longitude) == pytest.approx(ORIGIN[:2], abs=1e-7)
+    assert fix.altitude == pytest.approx(ORIGIN[2] + height, abs=0.01)
+
+
+def test_a_lidar_of_three_rows_gives_its_middle_row_and_its_points(world):
+    spawn(world, 'gzbot', GZBOT)
+    points = world.listener.listen(PointCloud2, '/scan/points')
+    scan = latest(world, LaserScan, '/scan')
+    assert scan.header.frame_id == 'base_link' and len(scan.ranges) == 90
+    expected = WALL - (world.entity_state('gzbot').pose.position.x + 0.05)
+    middle = scan.ranges[44:46]
+    print(f'\ngzbot lidar: the wall {expected:.4f} m ahead reads {list(middle)}')
+    assert middle == pytest.approx([expected / math.cos(math.pi / 4 / 89)] * 2, abs=0.02)
+    cloud = points[-1]
+    assert (cloud.height, cloud.width) == (3, 90)
+    assert [field.name for field in cloud.fields] == ['x', 'y', 'z', 'intensity', 'ring']
+    rows = cloud_points(cloud).reshape(3, 90)
+    assert (rows['ring'] == np.array([[0], [1], [2]])).all()
+    # The rows look 0.1 rad down (to the floor, 0.13 m below), level and 0.1 rad up (the wall).
+    height = world.entity_state('gzbot').pose.position.z + 0.07 + 0.06
+    floor = height / math.tan(0.1)
+    assert rows['x'][:, 44] == pytest.approx([floor, expected, expected], abs=0.02)
+    assert rows['z'][:, 44] == pytest.approx([-height, 0.0, expected * math.tan(0.1)],
+                                             abs=0.02)
+
+
+def test_a_turtlebot3_burger_like_robot_spawns_drives_and_scans(world):
+    spawn(world, 'burger', BURGER)
+    scans = world.listener.listen(LaserScan, '/scan')
+    imu = world.listener.listen(Imu, '/imu')
+    odometry = world.listener.listen(Odometry, '/odom')
+    travelled = drive_for_a_second(world, 'burger', '/cmd_vel', Twist)
+    print(f'\nburger: 0.2 m/s on /cmd_vel for 1 s (1 m/s^2 up) travelled {travelled:.4f} m')
+    assert travelled == pytest.approx(0.2 - 0.2 * 0.2 / 2.0, abs=0.01)
+    command(world, '/cmd_vel', Twist, 0.0)
+    world.step(steps(0.5))  # it stops, 0.2 s later
+    scan = reading_after(world, scans, world.time)
+    assert scan.header.frame_id == 'base_scan' and len(scan.ranges) == 360
+    ahead = WALL - (world.entity_state('burger').pose.position.x - 0.032)
+    print(f'burger: the wall {ahead:.4f} m ahead reads {scan.ranges[0]:.4f} m')
+    assert scan.ranges[0] == pytest.approx(ahead, abs=0.04)  # 1 cm noise
+    assert imu[-1].header.frame_id == 'burger/imu_link/tb3_imu'
+    assert imu[-1].linear_acceleration.z == pytest.approx(9.8, abs=0.1)
+    assert (odometry[-1].header.frame_id, odometry[-1].child_frame_id) == \
+        ('odom', 'base_footprint')
+

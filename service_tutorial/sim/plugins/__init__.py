@@ -9,8 +9,8 @@ Adding a kind touches this table and a new module, not the world. Gazebo Classic
 by the name in their <plugin filename>; gz-sim's systems by their library's name, however the
 filename writes it (libgz-sim8-diff-drive-system.so, ignition-gazebo-diff-drive-system), and
 gz-sim's sensors, which have no plugin, by their <sensor type> (sensor_kind). drive_config.py,
-gz_names.py and gz_parameters.py are no kinds: they read the drives' parameters, name gz
-topics and frames, and read gz's parameters.
+gz_names.py, gz_parameters.py and gz_sensor.py are no kinds: they read the drives' parameters,
+name gz topics and frames, read gz's parameters and what gz's sensors share.
 """
 
 from dataclasses import dataclass
@@ -42,7 +42,13 @@ KINDS = {
 # gz-sim's sensors, by <sensor type> (sdformat's aliases beside the names): their kinds are
 # GZ_SENSOR + the type, each matched whole.
 GZ_SENSOR = 'gz-sensor:'
-GZ_SENSORS = {}
+GZ_SENSORS = {
+    'gpu_lidar': _MODULE + 'gz_lidar', 'lidar': _MODULE + 'gz_lidar',
+    'camera': _MODULE + 'gz_camera', 'depth_camera': _MODULE + 'gz_camera',
+    'depth': _MODULE + 'gz_camera', 'rgbd_camera': _MODULE + 'gz_camera',
+    'rgbd': _MODULE + 'gz_camera', 'imu': _MODULE + 'gz_imu',
+    'navsat': _MODULE + 'gz_navsat', 'gps': _MODULE + 'gz_navsat',
+}
 # libgz-sim8-diff-drive-system.so, ignition-gazebo-diff-drive-system... -> diff-drive.
 _SYSTEM = re.compile(r'^(?:lib)?(?:gz-sim\d*|ignition-gazebo\d*)-(.+)-system(?:\.so)?$')
 

@@ -64,7 +64,15 @@ class CameraConfig(SensorConfig):
 
 def read_config(block):
     """Return the CameraConfig of a camera plugin from the <sensor> it sits in."""
-    sensor = sensor_of(block, ('camera',), 'camera')
+    return CameraConfig(**camera_fields(sensor_of(block, ('camera',), 'camera')))
+
+
+def camera_fields(sensor, *, encoding=None):
+    """
+    Return the CameraConfig fields of a <sensor>'s <camera>, or refuse what is absurd.
+
+    encoding: the image's, for a camera whose <image/format> is not read (a depth camera's).
+    """
     size = {}
     for side, default in (('width', 320), ('height', 240)):
         size[side] = sensor.number(f'camera/image/{side}', default, above=0, whole=True)
@@ -81,15 +89,16 @@ def read_config(block):
                         f'pi for a pinhole camera: {horizontal_fov:g}')
     near = sensor.number('camera/clip/near', 0.1, above=0.0)
     far = sensor.number('camera/clip/far', 100.0, above=near)
-    image_format = sensor.text('camera/image/format', 'R8G8B8')
-    if image_format not in ENCODINGS:
-        raise UrdfError(f'sensor {quoted(sensor.name)} <camera/image/format> must be one of '
-                        f'{", ".join(ENCODINGS)}: {quoted(image_format)}')
-    return CameraConfig(
-        name=sensor.name, link=sensor.link, position=sensor.position,
-        orientation=sensor.orientation, update_rate=sensor.update_rate, width=size['width'],
-        height=size['height'], horizontal_fov=horizontal_fov, near=near, far=far,
-        encoding=ENCODINGS[image_format])
+    if encoding is None:
+        image_format = sensor.text('camera/image/format', 'R8G8B8')
+        if image_format not in ENCODINGS:
+            raise UrdfError(f'sensor {quoted(sensor.name)} <camera/image/format> must be one of '
+                            f'{", ".join(ENCODINGS)}: {quoted(image_format)}')
+        encoding = ENCODINGS[image_format]
+    return {'name': sensor.name, 'link': sensor.link, 'position': sensor.position,
+            'orientation': sensor.orientation, 'update_rate': sensor.update_rate,
+            'width': size['width'], 'height': size['height'],
+            'horizontal_fov': horizontal_fov, 'near': near, 'far': far, 'encoding': encoding}
 
 
 class CameraSensor(Sensor):
@@ -167,7 +176,10 @@ class CameraSensor(Sensor):
 
     def _drawn(self, drawing=None):
         """Draw the last snapshot in the block's encoding (with the camera's own Drawing)."""
-        pixels = self._view.render_snapshot(drawing)
+        return self._encoded(self._view.render_snapshot(drawing))
+
+    def _encoded(self, pixels):
+        """Return rendered RGB pixels in the block's encoding."""
         encoding = self.config.encoding
         if encoding == 'bgr8':
             pixels = np.ascontiguousarray(pixels[:, :, ::-1])
