@@ -145,6 +145,8 @@ class MujocoWorld(Node):
         self.models = {}  # name -> ModelInterface, in spawn order
         # How the gz-sim systems' and sensors' gz topics are served on ROS (set_gz_bridge).
         self.gz_bridge = GzBridge()
+        self._next_gz_bridge = None
+        self._gz_bridge_due = self.create_guard_condition(self.apply_gz_bridge)
         self._topics_to_make = []  # interfaces of models spawned, topics made once answered
         # Made after the service callback that spawned returns, before the next step.
         self._topics_due = self.create_guard_condition(self.make_model_topics)
@@ -238,6 +240,7 @@ class MujocoWorld(Node):
         if pacer.resting():  # calls waiting are answered first
             return
         pacer.start_tick()
+        self.apply_gz_bridge()
         self.make_model_topics()
         for model in self.models.values():
             model.take_commands()  # they never wake the executor: see taken_at_tick.py
@@ -371,11 +374,19 @@ class MujocoWorld(Node):
 
     def set_gz_bridge(self, bridge):
         """
-        Serve the gz topics as a GzBridge says from now on, those of the robots there too.
+        Serve the gz topics as a GzBridge says, from the node's next turn on, from any thread.
 
-        Every gz face destroys its topics and makes them again under the bridge's names and
-        types; the robots run on. Call it from the node's executor (a callback of the node).
+        Then every gz face destroys its topics and makes them again under the bridge's names
+        and types (apply_gz_bridge); the robots run on, and keep their state.
         """
+        self._next_gz_bridge = bridge
+        self._gz_bridge_due.trigger()
+
+    def apply_gz_bridge(self):
+        """Serve every robot's gz topics as the bridge last set says, if it changed."""
+        bridge, self._next_gz_bridge = self._next_gz_bridge, None
+        if bridge is None:
+            return
         self.gz_bridge = bridge
         for interface in self.models.values():
             interface.remake_gz_topics()

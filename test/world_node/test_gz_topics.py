@@ -20,7 +20,7 @@ from repository import read_file, TEST_MODELS
 from sensor_msgs.msg import Image, Imu, JointState, LaserScan, NavSatFix, PointCloud2
 from sensor_msgs.msg import PointField
 from service_tutorial.conversions import seconds_of
-from service_tutorial.world_node.gz_bridge import BridgedTopic, GzBridge, ROS_TO_GZ
+from service_tutorial.world_node.gz_bridge import BridgedTopic, GZ_TO_ROS, GzBridge, ROS_TO_GZ
 from tf2_msgs.msg import TFMessage
 
 pytestmark = pytest.mark.ros
@@ -272,3 +272,31 @@ def test_a_turtlebot3_burger_like_robot_spawns_drives_and_scans(world):
     assert (odometry[-1].header.frame_id, odometry[-1].child_frame_id) == \
         ('odom', 'base_footprint')
 
+
+def test_a_new_bridge_remakes_the_topics_and_the_robot_runs_on(world):
+    spawn(world, 'surveyor', SURVEYOR)
+    scan_topic = SURVEYOR_SENSORS + 'front_lidar/scan'
+    scans = world.listener.listen(LaserScan, '/front_scan')
+    drive_for_a_second(world, 'surveyor', '/model/surveyor/cmd_vel', Twist)
+    world.world_node.set_gz_bridge(GzBridge([
+        BridgedTopic('/model/surveyor/cmd_vel', 'gz.msgs.Twist', '/cmd_vel', TwistStamped,
+                     ROS_TO_GZ),
+        BridgedTopic(scan_topic, 'gz.msgs.LaserScan', '/front_scan', LaserScan, GZ_TO_ROS)]))
+    node = world.listener
+    assert world.wait_for(lambda: (
+        node.count_subscribers('/model/surveyor/cmd_vel'), node.count_subscribers('/cmd_vel'),
+        node.count_publishers(scan_topic), node.count_publishers('/front_scan')) ==
+        (0, 1, 0, 1))
+    # The robot kept its command and its state: it drives on from where it was.
+    start = world.entity_state('surveyor').pose.position.x
+    world.step(steps(0.5))
+    assert world.entity_state('surveyor').pose.position.x == pytest.approx(start + 0.1,
+                                                                           abs=0.005)
+    # Commanded on the new topic, as TwistStamped: it stops; its lidar scans on /front_scan.
+    command(world, '/cmd_vel', TwistStamped, 0.0)
+    world.step(steps(0.2))
+    assert world.entity_state('surveyor').twist.linear.x == pytest.approx(0.0, abs=0.005)
+    scan = reading_after(world, scans, world.time)
+    expected = WALL - (world.entity_state('surveyor').pose.position.x + 0.1)
+    assert scan.ranges[90] == pytest.approx(expected, abs=0.02)
+    assert scan.header.frame_id == 'surveyor/chassis/front_lidar'
