@@ -65,9 +65,10 @@ class GzFace(PluginFace):
                 try:
                     check_topic(self.node, self.model_name, bridged.ros_name)
                 except WorldError as error:
-                    self.node.get_logger().error(
-                        f'{error}; gz topic {quoted(gz_name)} of {self.plugin.title} '
-                        f'{quoted(self.plugin.block.name)} is not served')
+                    if self.model is not None:  # not for a robot only described (spawnables)
+                        self.node.get_logger().error(
+                            f'{error}; gz topic {quoted(gz_name)} of {self.plugin.title} '
+                            f'{quoted(self.plugin.block.name)} is not served')
                     bridged = None
             served[role] = bridged
         return served
