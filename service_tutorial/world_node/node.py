@@ -388,8 +388,13 @@ class MujocoWorld(Node):
         if bridge is None:
             return
         self.gz_bridge = bridge
-        for interface in self.models.values():
-            interface.remake_gz_topics()
+        for name, interface in self.models.items():
+            try:
+                interface.remake_gz_topics()
+            except Exception as error:  # the middleware's: the others are served still
+                self.get_logger().error(f'model {quoted(name)}: its gz topics could not be '
+                                        f'made again ({error}); it has no topics now')
+                interface.destroy()
 
     def holding_time(self, operation):
         """Return operation, made to hold simulation time for as long as it runs."""

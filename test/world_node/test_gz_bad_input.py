@@ -16,6 +16,8 @@ import pytest
 from rcl_interfaces.msg import Log
 from rclpy.node import Node
 from repository import read_file, TEST_MODELS
+from sensor_msgs.msg import LaserScan
+from service_tutorial.world_node.gz_bridge import BridgedTopic, GzBridge, ROS_TO_GZ
 from simulation_interfaces.msg import Result
 from simulation_interfaces.srv import SpawnEntity
 
@@ -137,3 +139,19 @@ def test_a_gz_topic_ros_cannot_take_is_named_and_the_others_work(world):
         0.1 - 0.2 * 0.04 / 2.0, abs=0.005)
     keeps_driving(world, position + 0.1)
     assert not math.isnan(world.entity_state('newcomer').pose.position.y)
+
+
+def test_a_mapping_of_a_type_that_does_not_go_is_named_and_not_served(world):
+    world.world_node.set_gz_bridge(GzBridge([BridgedTopic(
+        '/model/newcomer/cmd_vel', 'gz.msgs.Twist', '/newcomer/cmd_vel', LaserScan,
+        ROS_TO_GZ)]))
+    position = world.entity_state('keeper').pose.position.x
+    result = spawn(world, 'newcomer', SURVEYOR)
+    assert result.result == Result.RESULT_OK, result.error_message
+    assert world.wait_for(lambda: [entry for entry in world.watcher.logged
+                                   if '/newcomer/cmd_vel' in entry.msg])
+    error, = [entry for entry in world.watcher.logged if '/newcomer/cmd_vel' in entry.msg]
+    print(f'\n{error.msg}')
+    assert error.level == Log.ERROR and 'LaserScan' in error.msg and 'Twist' in error.msg
+    assert world.watcher.count_subscribers('/newcomer/cmd_vel') == 0
+    keeps_driving(world, position)

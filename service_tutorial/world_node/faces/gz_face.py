@@ -20,6 +20,7 @@ from service_tutorial.sim.plugins.gz_names import DEFAULT_WORLD_NAME
 from service_tutorial.sim.validation import quoted
 from service_tutorial.sim.validation import WorldError
 from service_tutorial.world_node.faces.face import PluginFace
+from service_tutorial.world_node.gz_bridge import DEFAULT_ROS_TYPES, OTHER_ROS_TYPES
 from service_tutorial.world_node.ros_names import check_topic
 from service_tutorial.world_node.subscribers import SubscriberWatch
 from service_tutorial.world_node.taken_at_tick import take_messages, TakenAtTick
@@ -33,6 +34,16 @@ def gz_owner(world, model, plugin):
     world_name = world.name if world is not None else DEFAULT_WORLD_NAME
     model_name = model.name if model is not None else plugin.config.robot_name
     return world_name, model_name
+
+
+def check_types(bridged, gz_type, model_name):
+    """Refuse a BridgedTopic whose ROS type does not go with the gz type the system uses."""
+    allowed = (DEFAULT_ROS_TYPES[gz_type],) + OTHER_ROS_TYPES.get(gz_type, ())
+    if bridged.ros_type not in allowed:
+        raise WorldError(f'topic {quoted(bridged.ros_name)} of model {quoted(model_name)} '
+                         f'is bridged as {bridged.ros_type.__name__}, which does not go with '
+                         f'{gz_type}: only {" or ".join(kind.__name__ for kind in allowed)} '
+                         'does')
 
 
 class GzFace(PluginFace):
@@ -64,6 +75,7 @@ class GzFace(PluginFace):
             if bridged is not None:
                 try:
                     check_topic(self.node, self.model_name, bridged.ros_name)
+                    check_types(bridged, gz_type, self.model_name)
                 except WorldError as error:
                     if self.model is not None:  # not for a robot only described (spawnables)
                         self.node.get_logger().error(
