@@ -38,6 +38,7 @@ setup(
             'turning_demo = service_tutorial.pictures.turning_demo:main',
             'save_snapshot = service_tutorial.pictures.save_snapshot:main',
             'sensor_pictures = service_tutorial.pictures.sensor_pictures:main',
+            'create = service_tutorial.ros_gz.create:main',
         ],
     },
 )
