@@ -182,6 +182,11 @@ def read_config_text(text, *, source, expand_gz=None):
             from None
     if document is None:
         raise BridgeConfigError(f'bridge configuration {source}: the file is empty')
+    return read_config_document(document, source=source, expand_gz=expand_gz)
+
+
+def read_config_document(document, *, source, expand_gz=None):
+    """Read a bridge configuration parsed from YAML; the arguments are read_config_text's."""
     if not isinstance(document, list):
         raise BridgeConfigError(f'bridge configuration {source}: the top level must be a YAML '
                                 f'sequence of maps, one per topic, not a {_kind(document)}')
