@@ -33,8 +33,10 @@ from service_tutorial.node_main import run_node
 from service_tutorial.sim.recovery import Removal
 from service_tutorial.sim.validation import quoted
 from service_tutorial.sim.validation import WorldError
+from service_tutorial.world_node.bridge_channel import BridgeChannel
 from service_tutorial.world_node.camera_stream import CAMERA_PARAMETERS, CameraStream
 from service_tutorial.world_node.gazebo_services import GazeboServices
+from service_tutorial.world_node.gz_bridge import GzBridge
 from service_tutorial.world_node.log_forwarding import forward_core_logs
 from service_tutorial.world_node.model_interface import ModelInterface
 from service_tutorial.world_node.pacing import CLOCK_STREAM, JOINT_STATES_STREAM
@@ -157,6 +159,10 @@ class MujocoWorld(Node):
         self.tf_batch = TransformBatch(self)  # /tf, for every drive's OdomTfFace
         # Publishes the sensors' topics, from a participant of its own if it may (sensor_node.py).
         self.sensor_node = SensorNode(self)
+        # What ROS sees of the gz topics (gz_bridge.py), as the parameter_bridge processes
+        # running say (bridge_channel.py).
+        self.gz_bridge = GzBridge()
+        self.bridge_channel = BridgeChannel(self, self.gz_bridge)
         # Each model the world removes by itself to save the others, with the reason.
         self.removed_models_pub = self.create_publisher(
             RemovedModel, '~/removed_models', REMOVED_MODELS_QOS)
@@ -403,6 +409,7 @@ class MujocoWorld(Node):
         # An action server keeps the node's handle alive (and its /rosout) until destroyed.
         self.stepping_services.destroy()
         self.sensor_node.destroy()
+        self.bridge_channel.destroy()
         return super().destroy_node()
 
 
