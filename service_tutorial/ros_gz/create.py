@@ -101,8 +101,8 @@ class Create(Node):
         super().__init__('ros_gz_sim')
         flags, ignored = parse_flags(arguments)
         if ignored:
-            self.get_logger().warning(f'create ignores what it does not know: '
-                                      f'{" ".join(ignored)}')
+            shown = ' '.join(word or "''" for word in ignored)
+            self.get_logger().warning(f'create ignores what it does not know: {shown}')
         parameters = {name: self.declare_parameter(name, default).value
                       for name, default in FLAGS.items() if name != 'param'}
         self.world_name = parameters['world'] or flags.get('world', '')
