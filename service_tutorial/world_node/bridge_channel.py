@@ -13,6 +13,7 @@ count as one, the later message in force. A publisher leaving is an event of the
 one warning, and the others apply.
 """
 
+from rclpy.clock import Clock, ClockType
 from rclpy.event_handler import SubscriptionEventCallbacks
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from service_tutorial.world_node.bridge_config import BridgeConfigError, read_config_document
@@ -51,8 +52,10 @@ class BridgeChannel:
         self.bridges_sub = node.create_subscription(
             String, BRIDGES_TOPIC, self.bridges_callback, BRIDGES_QOS,
             event_callbacks=SubscriptionEventCallbacks(matched=self.matched_callback))
-        # Runs only while a bridge that may have left is still being looked for.
-        self.graph_timer = node.create_timer(GRAPH_LOOK_PERIOD, self.graph_callback)
+        # Runs only while the graph and the middleware disagree; on the steady wall clock, since
+        # simulation time stands still in a paused world (or one with use_sim_time).
+        self.graph_timer = node.create_timer(GRAPH_LOOK_PERIOD, self.graph_callback,
+                                             clock=Clock(clock_type=ClockType.STEADY_TIME))
         self.graph_timer.cancel()
 
     def bridges_callback(self, msg):

@@ -54,8 +54,8 @@ BURGER_YAML = f"""\
 
 @pytest.fixture(scope='module')
 def world():
-    """Start a paused world on a graph of its own, for this file's bridges."""
-    simulated = SimulatedWorld()
+    """Start a paused world on simulation time, as launch files start it, for the bridges."""
+    simulated = SimulatedWorld(use_sim_time=True)
     yield simulated
     simulated.close()
 
