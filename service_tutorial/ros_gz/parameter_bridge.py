@@ -77,7 +77,6 @@ def parameter_bridge_mappings(arguments):
                 errors.append(str(error))
         config_file = node.declare_parameter('config_file', '').value
         expand = node.declare_parameter('expand_gz_topic_names', False).value
-        node.declare_parameter('lazy', False)  # ros_gz_bridge's: every topic here is lazy
         if config_file:
             try:
                 reading = read_config_file(
