@@ -120,14 +120,15 @@ class GzBridge:
         Return the BridgedTopic a system's gz topic is served as, or None if it is not.
 
         direction: which way the system needs it: GZ_TO_ROS for what it publishes, ROS_TO_GZ
-        for the commands it takes. A mapping of the topic that does not carry it that way
-        leaves it unserved, as a bridge set up the other way would.
+        for the commands it takes. A mapping of the topic that does not carry it that way, or
+        names another gz type than the system's, leaves it unserved, as such a bridge would
+        carry nothing in gz.
         """
         mapping = self._mappings.get(gz_name)
         if mapping is None:
             return BridgedTopic(gz_name, gz_type, gz_name, DEFAULT_ROS_TYPES[gz_type],
                                 direction)
-        return mapping if mapping.carries(direction) else None
+        return mapping if mapping.carries(direction) and mapping.gz_type == gz_type else None
 
 
 def bridged_topics(entries, *, resolve=lambda name: name):

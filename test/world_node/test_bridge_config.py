@@ -6,6 +6,7 @@ turns what they read into the topics the world serves, and changes as bridges co
 """
 
 from geometry_msgs.msg import Twist, TwistStamped
+from nav_msgs.msg import Odometry
 import pytest
 from sensor_msgs.msg import LaserScan
 from service_tutorial.world_node import bridge_config
@@ -224,6 +225,14 @@ def test_the_bridge_serves_the_defaults_until_a_bridge_maps_a_topic_and_after_it
     assert bridge.served('/model/r/cmd_vel', 'gz.msgs.Twist', ROS_TO_GZ) == stamped
     # A bridge set up one way leaves the other unserved.
     assert bridge.served('/model/r/cmd_vel', 'gz.msgs.Twist', GZ_TO_ROS) is None
+    odometry = BridgedTopic('/model/r/odometry', 'gz.msgs.OdometryWithCovariance', '/odom',
+                            Odometry, GZ_TO_ROS)
+    bridge.set_mappings('c', [odometry])
+    # A mapping of another gz type than the system publishes carries nothing, as in gz.
+    assert bridge.served('/model/r/odometry', 'gz.msgs.Odometry', GZ_TO_ROS) is None
+    assert bridge.served('/model/r/odometry', 'gz.msgs.OdometryWithCovariance', GZ_TO_ROS) == \
+        odometry
+    bridge.drop('c')
     plain = BridgedTopic('/model/r/cmd_vel', 'gz.msgs.Twist', '/b/cmd_vel', Twist, BIDIRECTIONAL)
     bridge.set_mappings('b', [plain])
     assert bridge.served('/model/r/cmd_vel', 'gz.msgs.Twist', ROS_TO_GZ) == plain
@@ -231,4 +240,4 @@ def test_the_bridge_serves_the_defaults_until_a_bridge_maps_a_topic_and_after_it
     assert bridge.served('/model/r/cmd_vel', 'gz.msgs.Twist', ROS_TO_GZ) == stamped
     bridge.drop('a')
     assert bridge.served('/model/r/cmd_vel', 'gz.msgs.Twist', ROS_TO_GZ) == default
-    assert changes == [('a',), ('a', 'b'), ('a',), ()]
+    assert changes == [('a',), ('a', 'c'), ('a',), ('a', 'b'), ('a',), ()]
