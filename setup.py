@@ -38,6 +38,9 @@ setup(
             'turning_demo = service_tutorial.pictures.turning_demo:main',
             'save_snapshot = service_tutorial.pictures.save_snapshot:main',
             'sensor_pictures = service_tutorial.pictures.sensor_pictures:main',
+            'create = service_tutorial.ros_gz.create:main',
+            'parameter_bridge = service_tutorial.ros_gz.parameter_bridge:main',
+            'image_bridge = service_tutorial.ros_gz.image_bridge:main',
         ],
     },
 )

@@ -33,6 +33,7 @@ from service_tutorial.node_main import run_node
 from service_tutorial.sim.recovery import Removal
 from service_tutorial.sim.validation import quoted
 from service_tutorial.sim.validation import WorldError
+from service_tutorial.world_node.bridge_channel import BridgeChannel
 from service_tutorial.world_node.camera_stream import CAMERA_PARAMETERS, CameraStream
 from service_tutorial.world_node.gazebo_services import GazeboServices
 from service_tutorial.world_node.gz_bridge import GzBridge
@@ -162,6 +163,10 @@ class MujocoWorld(Node):
         self.tf_batch = TransformBatch(self)  # /tf, for every drive's OdomTfFace
         # Publishes the sensors' topics, from a participant of its own if it may (sensor_node.py).
         self.sensor_node = SensorNode(self)
+        # What ROS sees of the gz topics (gz_bridge.py), as the parameter_bridge processes
+        # running say (bridge_channel.py).
+        self.gz_bridge = GzBridge()
+        self.bridge_channel = BridgeChannel(self, self.gz_bridge)
         # Each model the world removes by itself to save the others, with the reason.
         self.removed_models_pub = self.create_publisher(
             RemovedModel, '~/removed_models', REMOVED_MODELS_QOS)
@@ -433,6 +438,7 @@ class MujocoWorld(Node):
         # An action server keeps the node's handle alive (and its /rosout) until destroyed.
         self.stepping_services.destroy()
         self.sensor_node.destroy()
+        self.bridge_channel.destroy()
         return super().destroy_node()
 
 

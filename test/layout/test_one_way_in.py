@@ -20,6 +20,7 @@ OPENERS = {
     'sim/world_files.py': 'world files',
     'sim/urdf/meshes.py': 'the mesh files a robot names',
     'sim/background_renders.py': 'the names of its threads, in /proc',
+    'world_node/bridge_config.py': "ros_gz_bridge's YAML configuration files",
     'testing/isolation.py': 'the lock file of a ROS domain',
     'pictures/turning_demo.py': "the demo's logs",
     'pictures/trajectory_plot.py': 'the SVG picture it writes',
