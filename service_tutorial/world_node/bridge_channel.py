@@ -44,10 +44,9 @@ def full_name(namespace, name):
 class BridgeChannel:
     """The world's ear for parameter_bridge processes: it sets and drops their mappings."""
 
-    def __init__(self, node, bridge):
-        """Hear the bridges on node's graph and set their mappings in bridge (a GzBridge)."""
+    def __init__(self, node):
+        """Hear the bridges on node's graph and set their mappings in the node's GzBridge."""
         self.node = node
-        self.bridge = bridge
         self._seen = set()  # full names of the bridges the graph has listed
         self.bridges_sub = node.create_subscription(
             String, BRIDGES_TOPIC, self.bridges_callback, BRIDGES_QOS,
@@ -57,6 +56,11 @@ class BridgeChannel:
         self.graph_timer = node.create_timer(GRAPH_LOOK_PERIOD, self.graph_callback,
                                              clock=Clock(clock_type=ClockType.STEADY_TIME))
         self.graph_timer.cancel()
+
+    @property
+    def bridge(self):
+        """Return the GzBridge the node serves its gz topics by (node.gz_bridge)."""
+        return self.node.gz_bridge
 
     def bridges_callback(self, msg):
         """Set the mappings a bridge published, in place of its earlier ones."""

@@ -163,10 +163,10 @@ class MujocoWorld(Node):
         self.tf_batch = TransformBatch(self)  # /tf, for every drive's OdomTfFace
         # Publishes the sensors' topics, from a participant of its own if it may (sensor_node.py).
         self.sensor_node = SensorNode(self)
-        # What ROS sees of the gz topics (gz_bridge.py), as the parameter_bridge processes
-        # running say (bridge_channel.py).
-        self.gz_bridge = GzBridge()
-        self.bridge_channel = BridgeChannel(self, self.gz_bridge)
+        # The parameter_bridge processes running change the mappings (bridge_channel.py); each
+        # change re-makes the gz faces' topics at the node's next turn.
+        self.gz_bridge.on_change(lambda: self.set_gz_bridge(self.gz_bridge))
+        self.bridge_channel = BridgeChannel(self)
         # Each model the world removes by itself to save the others, with the reason.
         self.removed_models_pub = self.create_publisher(
             RemovedModel, '~/removed_models', REMOVED_MODELS_QOS)
@@ -392,6 +392,8 @@ class MujocoWorld(Node):
         bridge, self._next_gz_bridge = self._next_gz_bridge, None
         if bridge is None:
             return
+        if bridge is not self.gz_bridge:
+            bridge.on_change(lambda: self.set_gz_bridge(bridge))
         self.gz_bridge = bridge
         for name, interface in self.models.items():
             try:
