@@ -34,6 +34,7 @@ from service_tutorial.sim.recovery import Removal
 from service_tutorial.sim.validation import quoted
 from service_tutorial.sim.validation import WorldError
 from service_tutorial.world_node.camera_stream import CAMERA_PARAMETERS, CameraStream
+from service_tutorial.world_node.collections_between_ticks import CollectionsBetweenTicks
 from service_tutorial.world_node.gazebo_services import GazeboServices
 from service_tutorial.world_node.log_forwarding import forward_core_logs
 from service_tutorial.world_node.model_interface import ModelInterface
@@ -106,6 +107,8 @@ class MujocoWorld(Node):
         except BaseException:
             self.forwarded_logs.stop()
             raise
+        # The world is built: full collections never walk it again, nor fall into a call.
+        self.collections = CollectionsBetweenTicks()
         self.get_logger().info(
             f'MuJoCo world ready: {", ".join(self.world.model_names()) or "no models"}, '
             f'timestep {self.world.timestep} s, real_time_factor '
@@ -258,6 +261,7 @@ class MujocoWorld(Node):
         # Steps on request (paused) keep every turn: with another Python thread in the process
         # (a test's, the benchmark's client), a turn given up after each tick cost StepSimulation
         # a quarter of its speed.
+        self.collections.collect_if_due()
         pacer.end_tick(back_to_back=period_ns == 0 and not world.paused)
 
     def publish_due(self):
@@ -402,6 +406,7 @@ class MujocoWorld(Node):
         # An action server keeps the node's handle alive (and its /rosout) until destroyed.
         self.stepping_services.destroy()
         self.sensor_node.destroy()
+        self.collections.close()
         return super().destroy_node()
 
 
