@@ -159,9 +159,11 @@ class MujocoWorld(Node):
         self.tf_batch = TransformBatch(self)  # /tf, for every drive's OdomTfFace
         # Publishes the sensors' topics, from a participant of its own if it may (sensor_node.py).
         self.sensor_node = SensorNode(self)
-        # Each model the world removes by itself to save the others, with the reason.
+        # Each model the world removes by itself to save the others, with the reason. Like
+        # /clock, it suits every subscriber's QoS: no default event handlers in every turn.
         self.removed_models_pub = self.create_publisher(
-            RemovedModel, '~/removed_models', REMOVED_MODELS_QOS)
+            RemovedModel, '~/removed_models', REMOVED_MODELS_QOS,
+            event_callbacks=PublisherEventCallbacks(use_default_callbacks=False))
         # The lesson's world services under ~/ (/mujoco/ by default), as gazebo_ros serves them.
         self.gazebo_services = GazeboServices(self)
         # The ROS 2 standard simulation interfaces, relative to the node's namespace.
