@@ -99,6 +99,10 @@ def targets(tables):
         spawn = by_key['round_trips'].rows[0]
         rows.append(['spawn p50 <= Trigger p50 + 2 x core spawn p50 (ms)', spawn[2], spawn[8],
                      spawn[9]])
+    if 'lesson_services' in by_key:
+        for row in by_key['lesson_services'].rows:
+            rows.append([f'lesson service, {row[0]} <= {row[5]:g} x MuJoCo + 2 x Trigger (ms)',
+                         row[2], row[6], row[7]])
     if 'spawn_growth' in by_key:
         for row in by_key['spawn_growth'].rows:
             rows.append([f'service spawn p50 <= core + 2 x Trigger, {row[0]} present (ms)',

@@ -36,6 +36,7 @@ from answers import answers_table
 from camera import camera_table
 from core import core_table
 from harness import BenchmarkError, Observer
+from lesson_services import lesson_services_table
 from report import machine, targets, write_json
 from round_trips import round_trip_table
 from sensors import sensor_table
@@ -60,6 +61,7 @@ class Config:
     calls: int = 200                       # round trips per service
     growth_counts: tuple = (1, 10, 50)     # models present for the spawn-cost rows
     growth_calls: int = 40                 # spawns per world size
+    lesson_calls: int = 40                 # R2-D2 spawns against MuJoCo's path, warm and cold
     robot_counts: tuple = (1, 10, 50)      # tinybots for speed and real-time rows
     speed_window: float = 2.0              # wall s per free-running measurement window
     speed_rounds: int = 3                  # alternating raw / world node windows
@@ -93,7 +95,8 @@ class Config:
     log_path: str = os.path.join(tempfile.gettempdir(), 'world_benchmark-nodes.log')
 
 
-QUICK = Config(calls=5, growth_counts=(1, 2), growth_calls=3, robot_counts=(1,),
+QUICK = Config(calls=5, growth_counts=(1, 2), growth_calls=3, lesson_calls=2,
+               robot_counts=(1,),
                speed_window=0.3, speed_rounds=1, speed_settle=0.1, real_time_window=0.3,
                warm_up=0.2, startup_runs=1,
                durations=(1,), velocities=(0.5,), turning_rtf=4.0, turning_check_rtfs=(),
@@ -122,7 +125,8 @@ def run(config, *, sections=SECTIONS, report=print):
     # a second longer to match a new world (1.9 s against 0.85 s), whatever the world does.
     measurements = {
         'startup': lambda: [startup_table(observer, config)],
-        'round_trips': lambda: [round_trip_table(observer, config)],
+        'round_trips': lambda: [round_trip_table(observer, config),
+                                lesson_services_table(observer, config)],
         'spawn_growth': lambda: [growth_table(observer, config)],
         'speed': lambda: speed_tables(observer, config),
         'turning': lambda: turning_tables(observer, config),

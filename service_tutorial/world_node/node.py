@@ -35,6 +35,7 @@ from service_tutorial.sim.validation import quoted
 from service_tutorial.sim.validation import WorldError
 from service_tutorial.world_node.bridge_channel import BridgeChannel
 from service_tutorial.world_node.camera_stream import CAMERA_PARAMETERS, CameraStream
+from service_tutorial.world_node.collections_between_ticks import CollectionsBetweenTicks
 from service_tutorial.world_node.gazebo_services import GazeboServices
 from service_tutorial.world_node.gz_bridge import GzBridge
 from service_tutorial.world_node.log_forwarding import forward_core_logs
@@ -108,6 +109,8 @@ class MujocoWorld(Node):
         except BaseException:
             self.forwarded_logs.stop()
             raise
+        # The world is built: full collections never walk it again, nor fall into a call.
+        self.collections = CollectionsBetweenTicks()
         self.get_logger().info(
             f'MuJoCo world ready: {", ".join(self.world.model_names()) or "no models"}, '
             f'timestep {self.world.timestep} s, real_time_factor '
@@ -167,9 +170,11 @@ class MujocoWorld(Node):
         # change re-makes the gz faces' topics at the node's next turn.
         self.gz_bridge.on_change(lambda: self.set_gz_bridge(self.gz_bridge))
         self.bridge_channel = BridgeChannel(self)
-        # Each model the world removes by itself to save the others, with the reason.
+        # Each model the world removes by itself to save the others, with the reason. Like
+        # /clock, it suits every subscriber's QoS: no default event handlers in every turn.
         self.removed_models_pub = self.create_publisher(
-            RemovedModel, '~/removed_models', REMOVED_MODELS_QOS)
+            RemovedModel, '~/removed_models', REMOVED_MODELS_QOS,
+            event_callbacks=PublisherEventCallbacks(use_default_callbacks=False))
         # The lesson's world services under ~/ (/mujoco/ by default), as gazebo_ros serves them.
         self.gazebo_services = GazeboServices(self)
         # The ROS 2 standard simulation interfaces, relative to the node's namespace.
@@ -270,6 +275,7 @@ class MujocoWorld(Node):
         # Steps on request (paused) keep every turn: with another Python thread in the process
         # (a test's, the benchmark's client), a turn given up after each tick cost StepSimulation
         # a quarter of its speed.
+        self.collections.collect_if_due()
         pacer.end_tick(back_to_back=period_ns == 0 and not world.paused)
 
     def publish_due(self):
@@ -441,6 +447,7 @@ class MujocoWorld(Node):
         self.stepping_services.destroy()
         self.sensor_node.destroy()
         self.bridge_channel.destroy()
+        self.collections.close()
         return super().destroy_node()
 
 

@@ -21,12 +21,14 @@ import world_benchmark  # noqa: E402
 QUICK = world_benchmark.QUICK
 EXPECTED_ROWS = {
     'round_trips': 4,
+    # a warm and a cold spawn and a delete of R2-D2 through the lesson's services
+    'lesson_services': 3,
     'spawn_growth': len(QUICK.growth_counts),
     'free_running': len(QUICK.robot_counts),
     'real_time': len(QUICK.robot_counts),
     'startup': 1,
     'turning': len(QUICK.durations) * len(QUICK.velocities),
-    'targets': (1 + 2 * len(QUICK.growth_counts) + 6 * len(QUICK.cost_counts) + 1
+    'targets': (1 + 3 + 2 * len(QUICK.growth_counts) + 6 * len(QUICK.cost_counts) + 1
                 + 2 * len(QUICK.robot_counts)
                 + (report.CPU_TARGET_ROBOTS in QUICK.robot_counts) + 1 + 1 + 4 + 3 + 3
                 + len(QUICK.cost_counts)),

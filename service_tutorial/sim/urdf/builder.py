@@ -165,9 +165,11 @@ def check_size(size, count, what, across):
     size: the shape's count numbers; across: what each number is multiplied by to give an
     extent (a radius by 2).
     """
-    if size.shape != (count,) or not np.all(np.isfinite(size)) or np.any(size <= 0.0):
+    # ndarray methods, not np.all() and the like: numpy's dispatch of those cost more than
+    # the checks of these few numbers, done for every shape of every spawn.
+    if size.shape != (count,) or not np.isfinite(size).all() or (size <= 0.0).any():
         raise UrdfError(f'{what} must be {count} positive numbers: {size.tolist()}')
-    extent = float(np.max(size * across))
+    extent = float((size * np.asarray(across)).max())
     if extent > MAX_SIZE:
         raise UrdfError(f'{what} {size.tolist()}: the shape is {extent:g} m across, more '
                         f'than the limit of {MAX_SIZE:g} m')
@@ -178,7 +180,7 @@ def _pose(matrix, what):
     if matrix is None:
         return np.zeros(3), np.array([1.0, 0.0, 0.0, 0.0])
     matrix = np.asarray(matrix, dtype=float)
-    if not np.all(np.isfinite(matrix)):
+    if not np.isfinite(matrix).all():
         raise UrdfError(f'{what} origin contains NaN or infinity')
     return matrix[:3, 3].copy(), frames.matrix_quaternion(matrix[:3, :3])
 
@@ -294,7 +296,7 @@ class _SpecBuilder:
 
     def _add_joint(self, body, joint):
         axis = np.asarray(joint.axis if joint.axis is not None else (1.0, 0.0, 0.0), float)
-        if axis.shape != (3,) or not np.all(np.isfinite(axis)):
+        if axis.shape != (3,) or not np.isfinite(axis).all():
             raise UrdfError(f"joint '{joint.name}' axis is not three finite numbers")
         norm = np.linalg.norm(axis)
         if norm < 1e-9:
@@ -409,7 +411,7 @@ class _SpecBuilder:
         position, orientation = _pose(inertial.origin, f"link '{link.name}' inertial")
         tensor = np.asarray(inertial.inertia if inertial.inertia is not None else np.eye(3),
                             dtype=float)
-        if not np.all(np.isfinite(tensor)):
+        if not np.isfinite(tensor).all():
             raise UrdfError(f"link '{link.name}' inertia contains NaN or infinity")
         moments, principal = frames.principal_inertia(orientation, tensor)
         if moments[0] <= 0.0:
@@ -462,6 +464,6 @@ class _SpecBuilder:
         if color is None:
             return DEFAULT_VISUAL_RGBA
         rgba = np.asarray(color.rgba, dtype=float)
-        if rgba.shape != (4,) or not np.all(np.isfinite(rgba)):
+        if rgba.shape != (4,) or not np.isfinite(rgba).all():
             raise UrdfError(f"link '{link_name}' material colour must be four finite numbers")
         return np.clip(rgba, 0.0, 1.0)

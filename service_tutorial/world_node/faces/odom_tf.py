@@ -29,6 +29,10 @@ class OdomTfFace(PluginFace):
         """Send through the node's TransformBatch (node.tf_batch), whatever the namespace."""
         self.drive = plugin
         self.tf_batch = node.tf_batch
+        self.transform = None
+
+    def make_topics(self):
+        """Make the message the transform goes out in, once the spawn is answered."""
         # Filled in and sent again every time: publish() copies the message.
         self.transform = TransformStamped()
 
