@@ -48,9 +48,8 @@ def test_clock_is_transient_local_with_depth_one(ros):
 
 
 def test_a_late_subscriber_gets_the_time_within_a_second_while_paused(ros):
-    world = ros.start_world(real_time_factor=0.0)
-    world.wait_sim(0.3)
-    world.empty('pause_physics')
+    world = ros.start_world(paused=True)
+    world.step(150)  # 0.3 s
     paused_at = world.node.world.time
     for qos in (LATCHED, TIME_SOURCE):  # the latched message, then the repeated one
         received = []  # (wall time, simulation time)
@@ -67,9 +66,8 @@ def test_a_late_subscriber_gets_the_time_within_a_second_while_paused(ros):
 
 
 def test_a_node_on_sim_time_started_during_a_pause_learns_the_time(ros):
-    world = ros.start_world(real_time_factor=0.0)
-    world.wait_sim(0.5)
-    world.empty('pause_physics')
+    world = ros.start_world(paused=True)
+    world.step(250)  # 0.5 s
     paused_at = world.node.world.time
     late = ros.add_node(Node('late_joiner', parameter_overrides=[
         Parameter('use_sim_time', value=True)]))
