@@ -43,23 +43,24 @@ class RosHarness:
     Nodes spinning on real executors in background threads, plus a client node.
 
     Each node gets its own single-threaded executor and thread, as if it ran in a process of
-    its own, so a node's callbacks keep the ordering they have under `ros2 run`. The test's own
-    nodes (the client node among them) spin on SettlingExecutors, as the testing fixture's
-    nodes do: settle() returns once they have handled what came to them, so that after a paused
-    world's steps (RunningWorld.step) what the steps sent is in the client's lists.
+    its own, so a node's callbacks keep the ordering they have under `ros2 run`. The client node
+    spins on a SettlingExecutor, as the testing fixture's test nodes do: settle() returns once
+    it has handled what came to it, so that after a paused world's steps (RunningWorld.step)
+    what the steps sent is in the client's lists.
     """
 
     def __init__(self):
         from rclpy.node import Node
         self._spinning = []
         self._action_clients = []
-        self.client_node = self.add_node(Node('test_client'))
+        self.client_node = self.add_node(Node('test_client'), settling=True)
 
-    def add_node(self, node, *, settling=True):
+    def add_node(self, node, *, settling=False):
         """
         Spin a node on an executor of its own; it is destroyed after the test.
 
-        settling: a SettlingExecutor, which settle() waits for; False for a plain one (the world).
+        settling: on a SettlingExecutor, which settle() waits for (the client node); otherwise
+        on a SingleThreadedExecutor, as `ros2 run` spins the world and the lesson's servers.
         """
         from rclpy.executors import SingleThreadedExecutor
         from service_tutorial.testing.settling_executor import SettlingExecutor
@@ -72,7 +73,7 @@ class RosHarness:
         return node
 
     def settle(self, timeout=10.0):
-        """Wait until the test's nodes have run every callback ready, and what followed."""
+        """Wait until the settling nodes have run every callback ready, and what followed."""
         from service_tutorial.testing.settling_executor import SettlingExecutor
         for node, executor, _ in self._spinning:
             if isinstance(executor, SettlingExecutor):

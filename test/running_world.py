@@ -49,7 +49,7 @@ class RunningWorld:
             step()
             self.ticks += 1
         self.node.step_timer.callback = counted_step
-        ros.add_node(self.node, settling=False)
+        ros.add_node(self.node)
         self._clients = {}
         self._heard_subscribers = {}  # topic of the world -> its subscribers at the last step
         self._commands = {}  # topic -> the publisher of command()
