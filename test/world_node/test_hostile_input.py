@@ -465,7 +465,8 @@ def sprinter():
 
 def test_absurd_cmd_vel_never_puts_nan_in_the_physics_or_odom(ros, capfd):
     world = world_with(ros, ('sprinter', sprinter(), pose(y=2.0, z=0.0), 'sprinter'))
-    topics = {'tinybot': ('/odom', '/cmd_vel'), 'sprinter': ('/sprinter/odom', '/sprinter/cmd_vel')}
+    topics = {'tinybot': ('/odom', '/cmd_vel'),
+              'sprinter': ('/sprinter/odom', '/sprinter/cmd_vel')}
     odometry = {name: ros.subscribe(Odometry, odom) for name, (odom, _) in topics.items()}
     commands = [twist((math.nan, 0, 0)), twist((math.inf, 0, 0)), twist(angular=(0, 0, -math.inf)),
                 twist((1e300, 0, 0)), twist((1.7e308, 0, 0), (0, 0, 1.7e308)),
