@@ -97,8 +97,8 @@ def test_scenery_that_is_not_static_or_not_safe_is_refused(tmp_path, name, text,
     with pytest.raises(WorldError) as refusal:
         World(scenery=path)
     # Named whole, or cut as quoted() cuts user text when the path is long (pytest -n 2's are).
-    assert any(f'scenery file {named}' in str(refusal.value) for named in (f"'{path}'",
-                                                                          quoted(path)))
+    names = (f"'{path}'", quoted(path))
+    assert any(f'scenery file {named}' in str(refusal.value) for named in names)
     assert message in str(refusal.value)
 
 
