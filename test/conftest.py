@@ -43,24 +43,42 @@ class RosHarness:
     Nodes spinning on real executors in background threads, plus a client node.
 
     Each node gets its own single-threaded executor and thread, as if it ran in a process of
-    its own, so a node's callbacks keep the ordering they have under `ros2 run`.
+    its own, so a node's callbacks keep the ordering they have under `ros2 run`. The client node
+    spins on a SettlingExecutor, as the testing fixture's test nodes do: settle() returns once
+    it has handled what came to it, so that after a paused world's steps (RunningWorld.step)
+    what the steps sent is in the client's lists.
     """
 
     def __init__(self):
         from rclpy.node import Node
         self._spinning = []
         self._action_clients = []
-        self.client_node = self.add_node(Node('test_client'))
+        self.client_node = self.add_node(Node('test_client'), settling=True)
 
-    def add_node(self, node):
-        """Spin a node on an executor of its own; it is destroyed after the test."""
+    def add_node(self, node, *, settling=False):
+        """
+        Spin a node on an executor of its own; it is destroyed after the test.
+
+        settling: on a SettlingExecutor, which settle() waits for (the client node); otherwise
+        on a SingleThreadedExecutor, as `ros2 run` spins the world and the lesson's servers.
+        """
         from rclpy.executors import SingleThreadedExecutor
-        executor = SingleThreadedExecutor()
+        from service_tutorial.testing.settling_executor import SettlingExecutor
+        executor = (SettlingExecutor(context=node.context) if settling
+                    else SingleThreadedExecutor(context=node.context))
         executor.add_node(node)
         thread = threading.Thread(target=executor.spin, daemon=True)
         thread.start()
         self._spinning.append((node, executor, thread))
         return node
+
+    def settle(self, timeout=10.0):
+        """Wait until the settling nodes have run every callback ready, and what followed."""
+        from service_tutorial.testing.settling_executor import SettlingExecutor
+        for node, executor, _ in self._spinning:
+            if isinstance(executor, SettlingExecutor):
+                assert executor.settle(timeout), \
+                    f'node {node.get_name()} kept running callbacks for {timeout} s'
 
     def destroy(self, entity):
         """
@@ -173,6 +191,12 @@ def class_ros(rclpy_session):
     harness = RosHarness()
     yield harness
     harness.shutdown()
+
+
+@pytest.fixture
+def paused_world(ros):
+    """Start the default world paused: time moves only by its step(n), in whole steps."""
+    return ros.start_world(paused=True)
 
 
 @pytest.fixture

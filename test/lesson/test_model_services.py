@@ -45,7 +45,7 @@ def test_spawn_model_wants_exactly_one_model_description():
 
 @pytest.mark.ros
 def test_lesson_programs_spawn_delete_and_reset(ros):
-    world = ros.start_world()
+    world = ros.start_world(paused=True)
 
     spawned = run_program('spawn_model_client')
 
@@ -64,11 +64,11 @@ def test_lesson_programs_spawn_delete_and_reset(ros):
     assert world.models() == ['tinybot']
     assert run_program('delete_model_client', 'r2d2').returncode == 1
 
-    assert ros.wait_for(lambda: world.now() >= 1.0)
+    assert world.step(500) == pytest.approx(1.0, abs=1e-9)
     reset = run_program('reset_simulation_client')
 
     assert reset.returncode == 0, reset.stderr
-    assert ros.wait_for(lambda: world.now() < 1.0)
+    assert ros.wait_for(lambda: world.now() == 0.0)
 
 
 @pytest.mark.ros

@@ -3,6 +3,7 @@ Robots written for Gazebo, brought to the world node through ROS as their users 
 
 The lesson's own files (../shared/lesson/robots beside the repository) are used where they are
 found and never copied here; the project's test models in test/models/ cover the same features.
+The world is paused and stepped: a drive is measured in simulated time, from a known step.
 """
 
 import math
@@ -18,7 +19,7 @@ from programs import run_program
 import pytest
 from rcl_interfaces.msg import Log
 from repository import LESSON_ROBOTS, read_model, TEST_MODELS
-from running_world import lesson_pose
+from running_world import COMMAND_STEPS, lesson_pose
 from sensor_msgs.msg import JointState
 from service_tutorial.conversions import make_pose, seconds_of as seconds, yaw_of
 from service_tutorial.lesson.spawn_model_client import split_xacro_arguments
@@ -63,9 +64,9 @@ def wheel_spacing(world, left_body, right_body):
 
 
 def settle(world, name):
-    """Wait until a model has come to rest; return its state."""
+    """Step a paused world until a model has come to rest; return its state."""
     for _ in range(20):
-        world.wait_sim(0.25)
+        world.step(125)  # 0.25 s
         state = world.state(name)
         speeds = (state.twist.linear.x, state.twist.linear.y, state.twist.linear.z,
                   state.twist.angular.x, state.twist.angular.y, state.twist.angular.z)
@@ -88,17 +89,17 @@ def test_the_answer_says_which_meshes_and_plugins_were_left_out():
 
 
 @needs_lesson
-def test_the_lessons_r2d2_spawns_unchanged_and_stands_upright(fast_world):
+def test_the_lessons_r2d2_spawns_unchanged_and_stands_upright(paused_world):
     with open(LESSON_R2D2) as urdf_file:
         urdf = urdf_file.read()
-    response = fast_world.spawn('r2d2', urdf, lesson_pose())  # as text: no base directory
+    response = paused_world.spawn('r2d2', urdf, lesson_pose())  # as text: no base directory
 
     assert response.success, response.status_message
     assert response.status_message == (
         "SpawnModel: Successfully spawned entity 'r2d2' "
         '(2 meshes not found, left out: l_finger.stl, l_finger_tip.stl)')
-    fast_world.wait_sim(3.0)
-    state = fast_world.state('r2d2')
+    paused_world.step(1500)  # 3 s
+    state = paused_world.state('r2d2')
     tilt = math.degrees(tilt_of(state.pose.orientation))
     print(f'\nlesson r2d2 after 3 s: x {state.pose.position.x:.4f}, y {state.pose.position.y:.4f}'
           f', z {state.pose.position.z:.4f}, tilt {tilt:.3f} deg')
@@ -123,45 +124,34 @@ def gcamp_installed(tmp_path, monkeypatch):
     return os.path.join(LESSON_GCAMP, 'urdf', 'tinybot_diff.xacro')
 
 
-def turn_for(world, ros, name, topic, angular_z, duration):
+def turn_for(world, name, topic, angular_z, duration):
     """
-    Command a turn on topic for duration s of simulation time from the first command's arrival.
+    Command a turn on topic for duration s of simulated time from the step the command came at.
 
-    Return the yaw change when duration has passed, ground truth from get_model_state: read
-    between two stamped states that bracket the end of the window, while the command holds.
-    Then stop the robot and wait until it is at rest.
+    Return the yaw change when duration has passed, ground truth from get_model_state, with the
+    command still in force (taken again every COMMAND_STEPS steps). Then stop the robot and step
+    until it is at rest.
     """
     drive = world.node.world.models[name].drive()
-    publisher = ros.client_node.create_publisher(Twist, topic, 10)
-    assert ros.wait_for(lambda: publisher.get_subscription_count() > 0)
     start_yaw = yaw_of(world.state(name).pose.orientation)
     assert drive.commanded_at is None, 'a command was still in force'
-    publisher.publish(twist(angular_z=angular_z))
-    assert ros.wait_for(lambda: drive.commanded_at is not None)
-    # At rest until the first command came: no turn at that time.
-    samples = [(drive.commanded_at, 0.0)]  # (simulation time, unwrapped yaw change)
-    end = samples[0][0] + duration
-    while samples[-1][0] < end:
-        world.wait_sim(0.01)
-        publisher.publish(twist(angular_z=angular_z))
+    turned = 0.0  # unwrapped
+    steps = world.steps(duration)
+    for start in range(0, steps, COMMAND_STEPS):
+        world.command(topic, twist(angular_z=angular_z))
+        world.step(min(COMMAND_STEPS, steps - start))
         state = world.state(name)
         assert drive.commanded_at is not None, \
-            f'the command lapsed before {seconds(state.header.stamp):.3f} s: cmd_vel came late'
-        turned = samples[-1][1] + math.remainder(
-            yaw_of(state.pose.orientation) - start_yaw - samples[-1][1], 2.0 * math.pi)
-        samples.append((seconds(state.header.stamp), turned))
-    publisher.publish(Twist())
-    (before, turned_before), (after, turned_after) = samples[-2:]
+            f'the command lapsed before {seconds(state.header.stamp):.3f} s'
+        turned += math.remainder(yaw_of(state.pose.orientation) - start_yaw - turned,
+                                 2.0 * math.pi)
+    world.command(topic, Twist())
     settle(world, name)
-    ros.destroy(publisher)
-    start = samples[0][0]
-    print(f'\n{len(samples) - 1} states over the turn, the last two at {before - start:.3f} and '
-          f'{after - start:.3f} s: {turned_before:.4f} and {turned_after:.4f} rad')
-    return turned_before + (turned_after - turned_before) * (end - before) / (after - before)
+    return turned
 
 
 def test_the_lessons_tinybot_xacro_spawns_through_the_client_and_turns(
-        gcamp_installed, real_time_world, ros):
+        gcamp_installed, paused_world, ros):
     odometry = ros.subscribe(Odometry, '/tb2/odom')
     spawned = spawn_client('--file', gcamp_installed, '--name', 'tb2', '--namespace', 'tb2',
                            '-x', '2')
@@ -170,19 +160,19 @@ def test_the_lessons_tinybot_xacro_spawns_through_the_client_and_turns(
     assert spawned.stdout.startswith(
         "success: True\nstatus_message: \"SpawnModel: Successfully spawned entity 'tb2'")
     assert 'not found' not in spawned.stdout, 'the DAE mesh was left out'
-    model = real_time_world.node.world.model
-    hokuyo_meshes = [geom for geom in body_geoms(real_time_world, 'tb2::hokuyo')
+    model = paused_world.node.world.model
+    hokuyo_meshes = [geom for geom in body_geoms(paused_world, 'tb2::hokuyo')
                      if model.geom_type[geom] == mujoco.mjtGeom.mjGEOM_MESH]
     assert hokuyo_meshes and all(model.mesh_vertnum[model.geom_dataid[geom]] > 0
                                  for geom in hokuyo_meshes)
 
-    settle(real_time_world, 'tb2')
-    turned = turn_for(real_time_world, ros, 'tb2', '/tb2/cmd_vel', 0.5, 2.0)
+    settle(paused_world, 'tb2')
+    turned = turn_for(paused_world, 'tb2', '/tb2/cmd_vel', 0.5, 2.0)
     # The block's wheelSeparation (0.4 m) is not the spacing of the robot's wheel joints
     # (0.3 m). gazebo_ros_diff_drive sets the wheel speeds from wheelSeparation alone, so wheels
     # that grip turn this robot 0.4 / 0.3 times the commanded angle; slip can only take from it.
-    gripping = 1.0 * (real_time_world.node.world.models['tb2'].drive().config.wheel_separation
-                      / wheel_spacing(real_time_world, 'tb2::left_wheel', 'tb2::right_wheel'))
+    gripping = 1.0 * (paused_world.node.world.models['tb2'].drive().config.wheel_separation
+                      / wheel_spacing(paused_world, 'tb2::left_wheel', 'tb2::right_wheel'))
     print(f'\nlesson tinybot_diff.xacro, angular.z 0.5 on /tb2/cmd_vel for 2 s after settling: '
           f'turned {turned:.4f} rad ({100.0 * (turned - 1.0):+.1f} %, ground truth); '
           f'wheels that grip would turn it {gripping:.4f} rad')
@@ -191,8 +181,8 @@ def test_the_lessons_tinybot_xacro_spawns_through_the_client_and_turns(
     assert odometry, 'nothing on /tb2/odom'
 
 
-def test_plugin_namespaces_and_remaps_put_the_topics_where_gazebo_would(real_time_world, ros):
-    world = real_time_world
+def test_plugin_namespaces_and_remaps_put_the_topics_where_gazebo_would(paused_world, ros):
+    world = paused_world
     ros2_drive = read_model('ros_namespaced_drive', TEST_MODELS)
     quiet = ros2_drive.replace('<publish_odom>true</publish_odom>', '')
     ros1_drive = read_model('ros_ros1_namespaced_drive', TEST_MODELS)
@@ -203,6 +193,7 @@ def test_plugin_namespaces_and_remaps_put_the_topics_where_gazebo_would(real_tim
             ('quiet', quiet, (-2.0, 2.0), 'quiet'),
             ('skid', read_model('skidbot_ros1', TEST_MODELS), (0.0, -3.0), '')]:
         world.spawn_or_fail(name, xml, make_pose(x, y, 0.05), namespace=namespace)
+    world.step(world.steps(0.5))  # they land and come to rest
 
     topics = world.topics()
     assert {'/bot/cmd', '/bot/odometry/wheels', '/fleet/one/cmd', '/fleet/one/odometry/wheels',
@@ -215,7 +206,8 @@ def test_plugin_namespaces_and_remaps_put_the_topics_where_gazebo_would(real_tim
                 for topic in ('/bot/odometry/wheels', '/fleet/one/odometry/wheels', '/r1_odom',
                               '/skidbot/odom')}
     joint_states = ros.subscribe(JointState, '/r1/joint_states')
-    assert ros.wait_for(lambda: all(odometry.values()) and joint_states)
+    world.step()  # the state streams go out where steps end
+    assert all(odometry.values()) and joint_states
     names = world.models()
     before = {name: world.state(name).pose for name in names}
 
@@ -245,7 +237,7 @@ def test_plugin_namespaces_and_remaps_put_the_topics_where_gazebo_would(real_tim
     assert not {'/bot/cmd', '/bot/odometry/wheels'} & world.topics()
 
 
-def test_xacro_with_find_and_arguments_through_the_client(real_time_world, ros):
+def test_xacro_with_find_and_arguments_through_the_client(paused_world, ros):
     path = os.path.join(TEST_MODELS, 'ros_mast_tinybot.urdf.xacro')
     spawned = spawn_client('--file', path, '--name', 'masted', '--namespace', 'masted',
                            '--xacro-arg', 'mast_height:=0.5', '-x', '2', '-y', '-2', '-z', '0.02',
@@ -254,17 +246,17 @@ def test_xacro_with_find_and_arguments_through_the_client(real_time_world, ros):
     assert spawned.returncode == 0, spawned.stdout + spawned.stderr
     assert spawned.stdout == ('success: True\nstatus_message: '
                               '"SpawnModel: Successfully spawned entity \'masted\'"\n')
-    model = real_time_world.node.world.model
-    [mast] = body_geoms(real_time_world, 'masted::mast_link')
+    model = paused_world.node.world.model
+    [mast] = body_geoms(paused_world, 'masted::mast_link')
     assert model.geom_size[mast] == pytest.approx([0.005, 0.005, 0.25])
-    before = settle(real_time_world, 'masted').pose.position
+    before = settle(paused_world, 'masted').pose.position
 
-    real_time_world.drive({'/masted/cmd_vel': twist(linear_x=0.2)}, 1.0)
-    after = real_time_world.state('masted').pose.position
+    paused_world.drive({'/masted/cmd_vel': twist(linear_x=0.2)}, 1.0)
+    after = paused_world.state('masted').pose.position
     assert after.x - before.x == pytest.approx(0.2, rel=0.1)
 
 
-def test_a_xacro_file_not_named_xacro_spawns_with_what_was_left_out_named(fast_world):
+def test_a_xacro_file_not_named_xacro_spawns_with_what_was_left_out_named(paused_world):
     spawned = spawn_client('--file', os.path.join(TEST_MODELS, 'ros_gripper_parts.xml'),
                            '--name', 'gripper', '-z', '0.5')
 
@@ -273,13 +265,13 @@ def test_a_xacro_file_not_named_xacro_spawns_with_what_was_left_out_named(fast_w
         'success: True\nstatus_message: "SpawnModel: Successfully spawned entity \'gripper\' '
         '(1 mesh not found, left out: meshes/ros_never_there.stl; '
         'plugins not simulated: libgazebo_ros_vacuum_gripper.so)"\n')
-    assert fast_world.models() == ['tinybot', 'gripper']
+    assert paused_world.models() == ['tinybot', 'gripper']
 
 
 def test_start_up_models_may_be_xacro_and_the_log_names_what_was_left_out(ros):
     log = ros.subscribe(Log, '/rosout', depth=1000)
     world = ros.start_world(
-        real_time_factor=0.0,
+        paused=True,
         models=['tinybot.urdf', os.path.join(TEST_MODELS, 'ros_gripper_parts.xml'),
                 os.path.join(TEST_MODELS, 'ros_mast_tinybot.urdf.xacro')],
         model_names=['tinybot', 'gripper', 'masted'], model_namespaces=['', '', 'masted'],
@@ -328,7 +320,7 @@ def test_the_clients_xacro_errors_are_one_line_naming_the_file(arguments, reason
     assert f"'{path}'" in failed.stderr and reason in failed.stderr
 
 
-def test_a_xacro_include_in_a_request_is_refused_and_never_read(fast_world, tmp_path):
+def test_a_xacro_include_in_a_request_is_refused_and_never_read(paused_world, tmp_path):
     included = tmp_path / 'parts.xacro'
     included.write_text('<robot xmlns:xacro="http://www.ros.org/wiki/xacro">'
                         '<link name="secret"/></robot>')
@@ -336,10 +328,10 @@ def test_a_xacro_include_in_a_request_is_refused_and_never_read(fast_world, tmp_
                f'<xacro:include filename="{included}"/><link name="a"/></robot>')
 
     with FileOpens([str(included)], str(tmp_path)) as opens:
-        response = fast_world.spawn('sneaky', request, make_pose(0.0, 3.0, 0.5))
+        response = paused_world.spawn('sneaky', request, make_pose(0.0, 3.0, 0.5))
     assert not response.success
     assert response.status_message == (
         'SpawnModel: model_xml contains xacro macros, which a spawn never expands: run xacro on '
         'it first, or name an installed .xacro file by its uri')
     assert opens.opened() == []
-    assert fast_world.models() == ['tinybot']
+    assert paused_world.models() == ['tinybot']

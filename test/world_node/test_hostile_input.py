@@ -302,10 +302,9 @@ def snapshot(world):
 @pytest.fixture(scope='class')
 def paused_world(class_ros):
     """Give a class tinybot and R2-D2 in a world paused after R2-D2 has landed."""
-    world = class_ros.start_world(real_time_factor=0.0)
+    world = class_ros.start_world(paused=True)
     world.spawn_or_fail('r2d2', read_model('r2d2'), pose(x=-2.0, y=1.0, z=1.0))
-    world.wait_sim(0.5)
-    world.empty('pause_physics')
+    world.step(250)  # 0.5 s
     return world
 
 
@@ -445,9 +444,9 @@ def test_the_file_watch_sees_python_and_mujoco_reading_a_file(tmp_path):
     assert mujoco_read.opened() == [canary['mesh']]
 
 
-def world_with(ros, *robots, real_time_factor=0.0):
-    """Start a world with tinybot and the given (name, xml, pose, namespace)."""
-    world = ros.start_world(real_time_factor=real_time_factor)
+def world_with(ros, *robots):
+    """Start a paused world with tinybot and the given (name, xml, pose, namespace)."""
+    world = ros.start_world(paused=True)
     for name, xml, initial_pose, namespace in robots:
         world.spawn_or_fail(name, xml, initial_pose, namespace=namespace)
     return world
@@ -465,32 +464,29 @@ def sprinter():
 
 
 def test_absurd_cmd_vel_never_puts_nan_in_the_physics_or_odom(ros, capfd):
-    world = world_with(ros, ('sprinter', sprinter(), pose(y=2.0, z=0.0), 'sprinter'),
-                       real_time_factor=1.0)
-    odometry = {name: ros.subscribe(Odometry, topic)
-                for name, topic in (('tinybot', '/odom'), ('sprinter', '/sprinter/odom'))}
-    publishers = {name: ros.client_node.create_publisher(Twist, topic, 10)
-                  for name, topic in (('tinybot', '/cmd_vel'), ('sprinter', '/sprinter/cmd_vel'))}
-    assert ros.wait_for(lambda: all(p.get_subscription_count() for p in publishers.values()))
+    world = world_with(ros, ('sprinter', sprinter(), pose(y=2.0, z=0.0), 'sprinter'))
+    topics = {'tinybot': ('/odom', '/cmd_vel'),
+              'sprinter': ('/sprinter/odom', '/sprinter/cmd_vel')}
+    odometry = {name: ros.subscribe(Odometry, odom) for name, (odom, _) in topics.items()}
     commands = [twist((math.nan, 0, 0)), twist((math.inf, 0, 0)), twist(angular=(0, 0, -math.inf)),
                 twist((1e300, 0, 0)), twist((1.7e308, 0, 0), (0, 0, 1.7e308)),
                 twist((-1e308, 0, 0), (0, 0, 1e308)), twist((1e6, 0, 0))]
     start = world.state('sprinter').pose.position
     fastest = {'tinybot': 0.0, 'sprinter': 0.0}
     for command in commands:
-        end = world.now() + 0.3
-        while world.now() < end:
-            for publisher in publishers.values():
-                publisher.publish(command)
-            world.wait_sim(0.005)
+        # Each command for 0.3 s, in steps of 10 (odometry goes out where steps end).
+        for _, cmd_vel in topics.values():
+            world.command(cmd_vel, command)
+        for _ in range(15):
+            world.step(10)
         for name in fastest:
             state = world.state(name)
             assert state.success, state.status_message
             assert finite(*pose_values(state.pose), *twist_values(state.twist))
             fastest[name] = max(fastest[name], math.hypot(state.twist.linear.x,
                                                           state.twist.linear.y))
-    for publisher in publishers.values():
-        publisher.publish(Twist())
+    for _, cmd_vel in topics.values():
+        world.command(cmd_vel, Twist())
     assert world.models() == ['tinybot', 'sprinter']
     for name, messages in odometry.items():
         assert len(messages) > 20, f'{name} stopped publishing odometry'
@@ -528,13 +524,13 @@ def monolith():
 def test_unstable_physics_resets_the_culprit_and_the_world_goes_on(ros, caplog):
     world = world_with(ros, ('spinner', spinner(), pose(x=2.0), ''))
     odometry = ros.subscribe(Odometry, '/odom')
-    world.wait_sim(0.2)
+    world.step(100)  # 0.2 s
     tinybot_before = world.state('tinybot').pose.position
     with caplog.at_level(logging.WARNING, logger='service_tutorial.world'):
         response = world.set_state('spinner', pose(x=2.0), twist(angular=(9e4, 9e4, 0.0)))
         assert response.success, response.status_message
         clock_before = len(world.clock)
-        world.wait_sim(0.5)
+        world.step(250)  # 0.5 s
     assert "model 'spinner' became unstable; it is put back to its spawn pose" in caplog.text
     assert len(world.clock) > clock_before, '/clock stopped'
     assert all(finite(stamp) for _, stamp in world.clock)
@@ -551,14 +547,15 @@ def test_unstable_physics_resets_the_culprit_and_the_world_goes_on(ros, caplog):
 def test_a_model_that_cannot_be_simulated_is_removed_and_the_world_goes_on(ros, caplog):
     world = world_with(ros, ('sound', sprinter(), pose(y=2.0, z=0.0), 'sound'))
     odometry = ros.subscribe(Odometry, '/odom')
-    world.wait_sim(0.2)
+    world.step(100)  # 0.2 s
     tinybot_before = world.state('tinybot').pose.position
     with caplog.at_level(logging.WARNING, logger='service_tutorial.world'):
         response = world.spawn('monolith', monolith(), pose(x=2.0, z=0.0), namespace='monolith')
         assert response.success, response.status_message
-        assert ros.wait_for(lambda: 'monolith' not in world.models(), timeout=10.0)
+        world.step(10)  # it cannot take a step, put back or not
+        assert 'monolith' not in world.models()
         clock_before = len(world.clock)
-        world.wait_sim(0.2)
+        world.step(100)
     assert ("model 'monolith' became unstable again after it was put back at its spawn pose; "
             'it is removed from the world') in caplog.text
     assert len(world.clock) > clock_before, '/clock stopped'

@@ -125,7 +125,7 @@ def test_this_packages_robots_are_offered_with_drives_sensors_and_bounds(ros):
 
 def test_an_installed_turtlebot3_xacro_is_offered_spawns_and_drives(ros, my_description):
     # Paused, stepped by StepSimulation: the drive is measured in simulation time, and a command
-    # lasts the whole drive (cmd_vel_timeout 10 s) however slowly the steps come.
+    # lasts the whole drive (cmd_vel_timeout 10 s).
     world = ros.start_world(paused=True, real_time_factor=0.0, cmd_vel_timeout=10.0)
     response = spawnables(world)
     robots = offered(response)
@@ -159,18 +159,10 @@ def test_an_installed_turtlebot3_xacro_is_offered_spawns_and_drives(ros, my_desc
     before = position_of(world, 'burger')
     command = Twist()
     command.linear.x = 0.1
-    cmd_vel = ros.client_node.create_publisher(Twist, '/burger/cmd_vel', 10)
-    assert ros.wait_for(lambda: cmd_vel.get_subscription_count() > 0)
-    cmd_vel.publish(command)
-    # The world takes the command at its first tick after it came: a few steps until the robot
-    # moves, then 2 s of simulation time.
-    for _ in range(100):
-        if position_of(world, 'burger')[0] - before[0] > 1e-5:
-            break
-        step(world, 2)
-    else:
-        pytest.fail('the command on /burger/cmd_vel never moved the robot')
-    step(world, 1000)
+    # Taken by the world before the steps (at a tick of the paused world), so that it acts
+    # from their first: 2 s of simulation time, however late it came in wall time.
+    world.command('/burger/cmd_vel', command)
+    world.step(1000)
     after = position_of(world, 'burger')
     print(f'\nmy_robot driven at 0.1 m/s for 2 s: from {before} to {after}')
     assert after[0] - before[0] == pytest.approx(0.2, abs=0.01)

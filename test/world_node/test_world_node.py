@@ -1,4 +1,10 @@
-"""The MuJoCo world node through its real services and topics, as a ROS user meets it."""
+"""
+The MuJoCo world node through its real services and topics, as a ROS user meets it.
+
+The world starts paused and time moves by whole steps (RunningWorld.step), so what a test
+asserts does not depend on how fast the machine is; a test of pausing a playing world, and one
+of /clock at either pace, let it play.
+"""
 
 import math
 
@@ -25,21 +31,20 @@ def resting_height_of_r2d2():
     return world.get_model_state('r2d2').position[2]
 
 
-def test_default_world_holds_tinybot_and_publishes_clock(fast_world):
-    assert fast_world.models() == ['tinybot']
-    start = fast_world.now()
-    fast_world.wait_sim(0.5)
-    assert fast_world.now() > start
+def test_default_world_holds_tinybot_and_publishes_clock(paused_world):
+    assert paused_world.models() == ['tinybot']
+    start = paused_world.now()
+    assert paused_world.step(250) == pytest.approx(start + 0.5, abs=1e-9)
 
 
-def test_spawned_r2d2_comes_to_rest_on_the_ground_with_the_lesson_heading(fast_world):
-    response = fast_world.spawn('r2d2', read_model('r2d2'), lesson_pose())
+def test_spawned_r2d2_comes_to_rest_on_the_ground_with_the_lesson_heading(paused_world):
+    response = paused_world.spawn('r2d2', read_model('r2d2'), lesson_pose())
     assert response.success, response.status_message
     assert 'r2d2' in response.status_message
-    assert fast_world.models() == ['tinybot', 'r2d2']
+    assert paused_world.models() == ['tinybot', 'r2d2']
 
-    fast_world.wait_sim(2.0)
-    state = fast_world.state('r2d2')
+    paused_world.step(1000)  # 2 s
+    state = paused_world.state('r2d2')
     assert state.success, state.status_message
     assert state.pose.position.x == pytest.approx(-2.0, abs=0.02)
     assert state.pose.position.y == pytest.approx(1.0, abs=0.02)
@@ -49,32 +54,33 @@ def test_spawned_r2d2_comes_to_rest_on_the_ground_with_the_lesson_heading(fast_w
     assert state.header.frame_id == 'world'
 
 
-def test_duplicate_spawn_fails_and_delete_works_once(fast_world):
-    assert fast_world.spawn('r2d2', read_model('r2d2'), lesson_pose()).success
-    again = fast_world.spawn('r2d2', read_model('r2d2'), lesson_pose())
+def test_duplicate_spawn_fails_and_delete_works_once(paused_world):
+    assert paused_world.spawn('r2d2', read_model('r2d2'), lesson_pose()).success
+    again = paused_world.spawn('r2d2', read_model('r2d2'), lesson_pose())
     assert not again.success
     assert "'r2d2'" in again.status_message and 'exists' in again.status_message
 
-    deleted = fast_world.delete('r2d2')
+    deleted = paused_world.delete('r2d2')
     assert deleted.success, deleted.status_message
-    assert fast_world.models() == ['tinybot']
-    twice = fast_world.delete('r2d2')
+    assert paused_world.models() == ['tinybot']
+    twice = paused_world.delete('r2d2')
     assert not twice.success
     assert "'r2d2'" in twice.status_message
 
 
-def test_cmd_vel_turns_tinybot_by_the_commanded_angle(real_time_world, ros):
+def test_cmd_vel_turns_tinybot_by_the_commanded_angle(paused_world, ros):
     odometry = ros.subscribe(Odometry, '/odom')
     joint_states = ros.subscribe(JointState, '/joint_states')
-    assert ros.wait_for(lambda: odometry and joint_states)
-    before = real_time_world.state('tinybot')
+    paused_world.step()  # the state streams go out where steps end
+    assert odometry and joint_states
+    before = paused_world.state('tinybot')
     odom_before = yaw_of(odometry[-1].pose.pose.orientation)
 
     twist = Twist()
     twist.angular.z = 0.5
-    real_time_world.drive({'/cmd_vel': twist}, 2.0)
+    paused_world.drive({'/cmd_vel': twist}, 2.0)
 
-    after = real_time_world.state('tinybot')
+    after = paused_world.state('tinybot')
     turned = yaw_of(after.pose.orientation) - yaw_of(before.pose.orientation)
     odom_turned = yaw_of(odometry[-1].pose.pose.orientation) - odom_before
     print(f'\ncmd_vel angular.z 0.5 for 2.0 s: turned {turned:.4f} rad (ground truth), '
@@ -87,17 +93,18 @@ def test_cmd_vel_turns_tinybot_by_the_commanded_angle(real_time_world, ros):
     assert abs(after.twist.angular.z) < 0.02, 'tinybot kept turning after the zero Twist'
 
 
-def test_cmd_vel_drives_tinybot_forward_by_the_commanded_distance(real_time_world, ros):
+def test_cmd_vel_drives_tinybot_forward_by_the_commanded_distance(paused_world, ros):
     odometry = ros.subscribe(Odometry, '/odom')
-    assert ros.wait_for(lambda: odometry)
-    before = real_time_world.state('tinybot').pose.position
+    paused_world.step()
+    assert odometry
+    before = paused_world.state('tinybot').pose.position
     odom_before = odometry[-1].pose.pose.position
 
     twist = Twist()
     twist.linear.x = 0.2
-    real_time_world.drive({'/cmd_vel': twist}, 2.0)
+    paused_world.drive({'/cmd_vel': twist}, 2.0)
 
-    after = real_time_world.state('tinybot').pose.position
+    after = paused_world.state('tinybot').pose.position
     moved = math.hypot(after.x - before.x, after.y - before.y)
     odom_after = odometry[-1].pose.pose.position
     odom_moved = math.hypot(odom_after.x - odom_before.x, odom_after.y - odom_before.y)
@@ -108,43 +115,40 @@ def test_cmd_vel_drives_tinybot_forward_by_the_commanded_distance(real_time_worl
     assert after.x > before.x
 
 
-def test_reset_world_restores_poses_while_the_clock_goes_on(fast_world, ros):
-    assert fast_world.spawn('r2d2', read_model('r2d2'), lesson_pose()).success
+def test_reset_world_restores_poses_while_the_clock_goes_on(paused_world, ros):
+    assert paused_world.spawn('r2d2', read_model('r2d2'), lesson_pose()).success
     moved = Pose()
     moved.position.x, moved.position.y, moved.orientation.w = 1.5, -0.5, 1.0
     response = ros.call(SetModelState, '/mujoco/set_model_state', SetModelState.Request(
         model_name='tinybot', pose=moved, reference_frame='world'))
     assert response.success, response.status_message
-    fast_world.wait_sim(1.0)
-    assert fast_world.state('tinybot').pose.position.x == pytest.approx(1.5, abs=0.01)
+    paused_world.step(500)  # 1 s
+    assert paused_world.state('tinybot').pose.position.x == pytest.approx(1.5, abs=0.01)
 
-    fast_world.empty('pause_physics')
-    clock_before = fast_world.now()
-    fast_world.empty('reset_world')
-    tinybot = fast_world.state('tinybot')
-    r2d2 = fast_world.state('r2d2')
+    clock_before = paused_world.now()
+    paused_world.empty('reset_world')
+    tinybot = paused_world.state('tinybot')
+    r2d2 = paused_world.state('r2d2')
     assert tinybot.pose.position.x == pytest.approx(0.0, abs=0.01)
     assert tinybot.pose.position.y == pytest.approx(0.0, abs=0.01)
     assert r2d2.pose.position.z == pytest.approx(1.0, abs=0.05)
-    assert fast_world.models() == ['tinybot', 'r2d2']
+    assert paused_world.models() == ['tinybot', 'r2d2']
     assert seconds(r2d2.header.stamp) >= clock_before, 'reset_world moved the clock back'
-    fast_world.empty('unpause_physics')
-    fast_world.wait_sim(0.1)
-    assert fast_world.now() > clock_before
+    # The clock goes on from where it was.
+    assert paused_world.step(50) == pytest.approx(clock_before + 0.1, abs=1e-9)
 
 
-def test_reset_simulation_also_sets_the_clock_back_to_zero(fast_world):
-    assert fast_world.spawn('r2d2', read_model('r2d2'), lesson_pose()).success
-    fast_world.wait_sim(1.5)
-    fast_world.empty('pause_physics')
-    fast_world.empty('reset_simulation')
-    state = fast_world.state('r2d2')
+def test_reset_simulation_also_sets_the_clock_back_to_zero(paused_world):
+    assert paused_world.spawn('r2d2', read_model('r2d2'), lesson_pose()).success
+    paused_world.step(750)  # 1.5 s
+    paused_world.empty('reset_simulation')
+    state = paused_world.state('r2d2')
     assert seconds(state.header.stamp) == 0.0
     assert state.pose.position.z == pytest.approx(1.0, abs=1e-6)
-    assert fast_world.ros.wait_for(lambda: fast_world.now() == 0.0)
-    assert fast_world.models() == ['tinybot', 'r2d2']
-    fast_world.empty('unpause_physics')
-    fast_world.wait_sim(0.2)
+    assert paused_world.ros.wait_for(lambda: paused_world.now() == 0.0)
+    assert paused_world.models() == ['tinybot', 'r2d2']
+    # Time goes on from zero.
+    assert paused_world.step(100) == pytest.approx(0.2, abs=1e-9)
 
 
 def test_pause_physics_stops_simulation_time(fast_world):
@@ -156,35 +160,35 @@ def test_pause_physics_stops_simulation_time(fast_world):
     fast_world.wait_sim(0.1)
 
 
-def test_state_in_a_model_frame_and_in_a_link_frame(fast_world):
-    assert fast_world.spawn('r2d2', read_model('r2d2'), lesson_pose()).success
-    fast_world.empty('pause_physics')
-    world_state = fast_world.state('r2d2')
-    relative = fast_world.state('r2d2', frame='tinybot')
+def test_state_in_a_model_frame_and_in_a_link_frame(paused_world):
+    assert paused_world.spawn('r2d2', read_model('r2d2'), lesson_pose()).success
+    paused_world.step(100)
+    world_state = paused_world.state('r2d2')
+    relative = paused_world.state('r2d2', frame='tinybot')
     assert relative.success, relative.status_message
-    tinybot = fast_world.state('tinybot').pose.position
+    tinybot = paused_world.state('tinybot').pose.position
     # tinybot has not turned, so the offset is the same in both frames.
     assert relative.pose.position.x == pytest.approx(world_state.pose.position.x - tinybot.x,
                                                      abs=1e-3)
     assert relative.header.frame_id == 'tinybot'
-    assert fast_world.state('r2d2', frame='tinybot::base_link').success
+    assert paused_world.state('r2d2', frame='tinybot::base_link').success
 
 
-def test_every_model_gets_a_ros_interface_under_its_namespace(fast_world):
-    node = fast_world.node
-    spawned = fast_world.spawn('tiny', read_model('tinybot'), make_pose(2.0),
-                               namespace='robots/tiny/')
+def test_every_model_gets_a_ros_interface_under_its_namespace(paused_world):
+    node = paused_world.node
+    spawned = paused_world.spawn('tiny', read_model('tinybot'), make_pose(2.0),
+                                 namespace='robots/tiny/')
     assert spawned.success, spawned.status_message
-    assert fast_world.spawn('r2d2', read_model('r2d2'), lesson_pose()).success
+    assert paused_world.spawn('r2d2', read_model('r2d2'), lesson_pose()).success
     assert list(node.models) == ['tinybot', 'tiny', 'r2d2']
     assert node.models['tiny'].namespace == '/robots/tiny'
     assert node.models['tinybot'].namespace == node.models['r2d2'].namespace == ''
     tiny_topics = {'/robots/tiny/cmd_vel', '/robots/tiny/odom', '/robots/tiny/joint_states'}
-    assert tiny_topics | {'/cmd_vel', '/odom', '/joint_states'} <= fast_world.topics()
+    assert tiny_topics | {'/cmd_vel', '/odom', '/joint_states'} <= paused_world.topics()
     assert not node.models['r2d2'].faces, 'R2-D2 has no plugin with a ROS face'
-    assert fast_world.delete('tiny').success
+    assert paused_world.delete('tiny').success
     assert list(node.models) == ['tinybot', 'r2d2']
-    assert not tiny_topics & fast_world.topics()
+    assert not tiny_topics & paused_world.topics()
 
 
 BAD_SPAWNS = [
@@ -204,11 +208,10 @@ def bad_pose(**orientation):
     return pose
 
 
-def test_every_refusal_names_its_cause_and_changes_nothing(fast_world):
-    assert fast_world.spawn('r2d2', read_model('r2d2'), lesson_pose()).success
-    fast_world.wait_sim(0.3)
-    fast_world.empty('pause_physics')
-    before = {name: fast_world.state(name) for name in fast_world.models()}
+def test_every_refusal_names_its_cause_and_changes_nothing(paused_world):
+    assert paused_world.spawn('r2d2', read_model('r2d2'), lesson_pose()).success
+    paused_world.step(150)
+    before = {name: paused_world.state(name) for name in paused_world.models()}
 
     nan_position = Pose()
     nan_position.position.x = math.nan
@@ -218,24 +221,24 @@ def test_every_refusal_names_its_cause_and_changes_nothing(fast_world):
         ('nan_p', read_model('tinybot'), nan_position, 'world', 'NaN'),
     ]
     for name, xml, pose, frame, cause in refusals:
-        response = fast_world.spawn(name, xml, pose, frame)
+        response = paused_world.spawn(name, xml, pose, frame)
         assert not response.success, f'{name!r} was spawned'
         assert cause.lower() in response.status_message.lower(), response.status_message
 
     unknown = [
-        fast_world.delete('ghost'),
-        fast_world.state('ghost'),
-        fast_world.state('r2d2', frame='ghost'),
-        fast_world.set_state('ghost', lesson_pose()),
-        fast_world.set_state('r2d2', bad_pose(w=0.0)),
+        paused_world.delete('ghost'),
+        paused_world.state('ghost'),
+        paused_world.state('r2d2', frame='ghost'),
+        paused_world.set_state('ghost', lesson_pose()),
+        paused_world.set_state('r2d2', bad_pose(w=0.0)),
     ]
     for response in unknown:
         assert not response.success
         assert "'ghost'" in response.status_message or 'zero' in response.status_message
 
-    assert fast_world.models() == list(before)
+    assert paused_world.models() == list(before)
     for name, state in before.items():
-        now = fast_world.state(name)
+        now = paused_world.state(name)
         assert now.pose == state.pose, f'{name} moved'
         assert now.twist == state.twist, f'{name} changed speed'
         assert now.header.stamp == state.header.stamp, 'time went on while paused'

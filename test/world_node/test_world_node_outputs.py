@@ -48,9 +48,8 @@ def test_clock_is_transient_local_with_depth_one(ros):
 
 
 def test_a_late_subscriber_gets_the_time_within_a_second_while_paused(ros):
-    world = ros.start_world(real_time_factor=0.0)
-    world.wait_sim(0.3)
-    world.empty('pause_physics')
+    world = ros.start_world(paused=True)
+    world.step(150)  # 0.3 s
     paused_at = world.node.world.time
     for qos in (LATCHED, TIME_SOURCE):  # the latched message, then the repeated one
         received = []  # (wall time, simulation time)
@@ -67,9 +66,8 @@ def test_a_late_subscriber_gets_the_time_within_a_second_while_paused(ros):
 
 
 def test_a_node_on_sim_time_started_during_a_pause_learns_the_time(ros):
-    world = ros.start_world(real_time_factor=0.0)
-    world.wait_sim(0.5)
-    world.empty('pause_physics')
+    world = ros.start_world(paused=True)
+    world.step(250)  # 0.5 s
     paused_at = world.node.world.time
     late = ros.add_node(Node('late_joiner', parameter_overrides=[
         Parameter('use_sim_time', value=True)]))
@@ -272,7 +270,7 @@ def test_the_log_handler_leaves_with_the_node(rclpy_session):
     assert handlers() == [] and core.level == level
 
 
-def spawn_r2d2(ros, namespace, *, tries=4):
+def spawn_r2d2(ros, namespace, *, tries=6):
     """
     Spawn R2-D2 into a world just started, asking again if no answer comes.
 
@@ -280,11 +278,16 @@ def spawn_r2d2(ros, namespace, *, tries=4):
     that answer is lost (CI saw Fast DDS's 'failed to send response (timeout)'). Asked again,
     the world says R2-D2 exists when the first request did spawn it.
     """
+    service = f'{namespace}/mujoco/spawn_urdf_model'
+    waiting = ros.client_node.create_client(SpawnModel, service)
+    try:
+        assert waiting.wait_for_service(timeout_sec=60.0), f'no {service}'
+    finally:
+        ros.destroy(waiting)
     request = SpawnModel.Request(model_name='r2d2', model_xml=read_model('r2d2'))
     for attempt in range(tries):
         try:
-            response = ros.call(SpawnModel, f'{namespace}/mujoco/spawn_urdf_model', request,
-                                timeout=15.0)
+            response = ros.call(SpawnModel, service, request, timeout=5.0)
         except AssertionError:
             if attempt == tries - 1:
                 raise
@@ -299,15 +302,17 @@ def test_a_stop_signal_ends_the_world_quietly_whatever_it_was_doing(
         ros, start_program, real_time_factor):
     # SIGTERM (docker stop, launch after a SIGINT) shuts the context down under the step
     # callback, mostly while it publishes; SIGINT too, in a program started where it is ignored.
-    clock = []
-    ros.client_node.create_subscription(Clock, '/clock', clock.append, TIME_SOURCE)
-    # Each world has its own namespace: the graph may still list the services of the world
-    # just stopped, and a call sent to them would never be answered.
-    for start in range(3):
-        namespace = f'/stopped_{int(real_time_factor)}_{start}'
-        world = start_program([sys.executable, '-m', 'service_tutorial.world_node.node',
-                               '--ros-args', '-r', f'__ns:={namespace}',
-                               '-p', f'real_time_factor:={real_time_factor}'], cwd=ROOT)
+    # Three worlds, started at once, each in a namespace of its own with its /clock there too:
+    # each is stopped at another moment of its steps.
+    namespaces = [f'/stopped_{int(real_time_factor)}_{start}' for start in range(3)]
+    worlds = {namespace: start_program(
+        [sys.executable, '-m', 'service_tutorial.world_node.node', '--ros-args',
+         '-r', f'__ns:={namespace}', '-r', f'/clock:={namespace}/clock',
+         '-p', f'real_time_factor:={real_time_factor}'], cwd=ROOT) for namespace in namespaces}
+    for namespace, world in worlds.items():
+        clock = []
+        ros.client_node.create_subscription(Clock, f'{namespace}/clock', clock.append,
+                                            TIME_SOURCE)
         try:
             spawn_r2d2(ros, namespace)
             clock.clear()

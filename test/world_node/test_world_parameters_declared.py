@@ -2,13 +2,14 @@
 The world node's parameters as declared: types, ranges, descriptions and the values refused.
 
 No world runs here. The parameters are declared on a plain node, as the world node declares
-them, and set over ROS as `ros2 param set` does; bad values at start-up are also given to the
-installed `mujoco_world`, one process per value, a few at a time, each of which must end at
-once, as must web:=true where viser does not import. What a value does to a running world is
-test_world_parameters_running's part.
+them, and set over ROS as `ros2 param set` does. Every bad value at start-up goes through the
+world's own reading in this process (declare_world_parameters under run_or_exit, as the world
+node's main() calls it): the line it would write and its exit status. Two of them are also given
+to the installed `mujoco_world`, which must end at once with that line, as must web:=true where
+viser does not import. What a value does to a running world is test_world_parameters_running's
+part.
 """
 
-from concurrent.futures import ThreadPoolExecutor
 import itertools
 import math
 import os
@@ -130,8 +131,14 @@ NAMES = [spec.name for spec in WORLD_PARAMETERS]
 # where it has one (booleans and the snapshot directory take every value of their type).
 START_UP_CASES = [(name, 'wrong type') for name in NAMES] + [
     (name, 'out of range') for name in NAMES if name in OUT_OF_RANGE]
-# Processes started at once: each spends most of its second importing, on one core.
-PARALLEL_PROCESSES = 4
+# The cases also given to the installed program: a wrong type and a value out of range.
+PROGRAM_CASES = [('timestep', 'wrong type'), ('web_port', 'out of range')]
+
+
+def bad_argument(name, kind):
+    """Return the -p argument of a bad start-up case: name:=value."""
+    value = WRONG_TYPE[name] if kind == 'wrong type' else OUT_OF_RANGE[name][0]
+    return f'{name}:={value}'
 
 
 def world_command():
@@ -141,34 +148,33 @@ def world_command():
         sys.executable, '-m', 'service_tutorial.world_node.node']
 
 
-def run_world(argument):
-    """Start the world with one -p argument; return (exit status, stderr) once it ends."""
+def read_at_start_up(argument, capsys):
+    """
+    Read the world's parameters from one -p argument as mujoco_world does; return its ending.
+
+    The reading runs under run_or_exit, as the world node's main() runs it: (exit status, what
+    it wrote on stderr), or (None, '') if the value was taken.
+    """
+    capsys.readouterr()
+    node = None
+
+    def read():
+        nonlocal node
+        node = node_with('-p', argument)
+        declare_world_parameters(node)
     try:
-        run = subprocess.run([*world_command(), '--ros-args', '-p', argument],
-                             capture_output=True, text=True, timeout=60)
-    except subprocess.TimeoutExpired:
-        return None, f'still running after 60 s with -p {argument}'
-    return run.returncode, run.stderr
+        run_or_exit('mujoco_world', read)
+        status = None
+    except SystemExit as ended:
+        status = ended.code
+    finally:
+        if node is not None:
+            node.destroy_node()
+    return status, capsys.readouterr().err
 
 
-@pytest.fixture(scope='module')
-def start_up_runs():
-    """Run the world once per bad start-up value, a few at a time; results by case."""
-    def argument(case):
-        name, kind = case
-        value = WRONG_TYPE[name] if kind == 'wrong type' else OUT_OF_RANGE[name][0]
-        return f'{name}:={value}'
-    missing = [name for name in NAMES if name not in WRONG_TYPE]
-    assert not missing, f'no wrong-type value in WRONG_TYPE: {missing}'
-    with ThreadPoolExecutor(PARALLEL_PROCESSES) as pool:
-        results = pool.map(run_world, map(argument, START_UP_CASES))
-        return dict(zip(START_UP_CASES, results))
-
-
-@pytest.mark.parametrize('name, kind', START_UP_CASES)
-def test_a_bad_value_at_start_up_ends_the_world_with_one_line_naming_it_and_status_2(
-        start_up_runs, name, kind):
-    status, stderr = start_up_runs[name, kind]
+def assert_refused_with_one_line(name, kind, status, stderr):
+    """Assert a bad start-up value ended the world with status 2 and one line naming it."""
     lines = stderr.strip().splitlines()
     assert status == 2 and len(lines) == 1, stderr
     line = lines[0]
@@ -179,6 +185,28 @@ def test_a_bad_value_at_start_up_ends_the_world_with_one_line_naming_it_and_stat
         assert 'has the wrong type' in line
     else:  # out of range, or (model details) not one per model
         assert OUT_OF_RANGE[name][1] in line
+
+
+def test_every_parameter_has_a_wrong_type_value_to_try():
+    missing = [name for name in NAMES if name not in WRONG_TYPE]
+    assert not missing, f'no wrong-type value in WRONG_TYPE: {missing}'
+
+
+@pytest.mark.parametrize('name, kind', START_UP_CASES)
+def test_a_bad_value_at_start_up_ends_the_world_with_one_line_naming_it_and_status_2(
+        rclpy_session, capsys, name, kind):
+    status, stderr = read_at_start_up(bad_argument(name, kind), capsys)
+    assert_refused_with_one_line(name, kind, status, stderr)
+
+
+@pytest.mark.parametrize('name, kind', PROGRAM_CASES)
+def test_the_installed_world_ends_at_once_on_a_bad_value_with_that_line(
+        rclpy_session, capsys, name, kind):
+    argument = bad_argument(name, kind)
+    run = subprocess.run([*world_command(), '--ros-args', '-p', argument],
+                         capture_output=True, text=True, timeout=60)
+    assert_refused_with_one_line(name, kind, run.returncode, run.stderr)
+    assert run.stderr == read_at_start_up(argument, capsys)[1]
 
 
 # First on the world's PYTHONPATH, it makes `import viser` fail as where viser is not installed.

@@ -96,14 +96,14 @@ def test_paused_follows_the_parameter_and_the_services_both_ways(ros):
 ])
 def test_a_bad_value_at_run_time_is_refused_with_a_reason_and_the_world_goes_on(
         ros, name, value, words):
-    world = ros.start_world(real_time_factor=0.0)
+    world = ros.start_world(paused=True)
     before = world.node.parameters[name]
     result = ros.set_parameter('mujoco', name, value)
     assert not result.successful
     for word in words:
         assert word in result.reason, result.reason
     assert world.node.parameters[name] == before
-    world.wait_sim(0.2)
+    assert world.step(100) == pytest.approx(0.2, abs=1e-9)
     assert world.models() == ['tinybot']
 
 
@@ -125,31 +125,24 @@ def test_publish_rates_set_at_run_time_space_the_messages_out(ros):
         assert gaps and all(gap == pytest.approx(period, abs=0.0011) for gap in gaps), gaps
 
 
-def spin_tinybot(world):
-    """Send tinybot one cmd_vel, turning; return the publisher."""
-    publisher = world.ros.client_node.create_publisher(Twist, '/cmd_vel', 10)
-    assert world.ros.wait_for(lambda: publisher.get_subscription_count() > 0)
-    twist = Twist()
-    twist.angular.z = 1.0
-    publisher.publish(twist)
-    return publisher
-
-
 def turning_rate(world):
     return world.state('tinybot').twist.angular.z
 
 
 def test_cmd_vel_timeout_set_at_run_time_applies_to_the_command_in_force(ros):
-    world = ros.start_world(real_time_factor=0.0)
+    world = ros.start_world(paused=True)
     assert ros.set_parameter('mujoco', 'cmd_vel_timeout', 0).successful  # an integer: never lapse
     assert world.node.parameters['cmd_vel_timeout'] == 0.0
-    spin_tinybot(world)
-    assert ros.wait_for(lambda: turning_rate(world) > 0.5), 'tinybot did not start turning'
-    world.wait_sim(1.0)
+    twist = Twist()
+    twist.angular.z = 1.0
+    world.command('/cmd_vel', twist)
+    world.step(250)
+    assert turning_rate(world) > 0.5, 'tinybot did not start turning'
+    world.step(500)
     assert turning_rate(world) > 0.5, 'the command lapsed although cmd_vel_timeout is 0'
     # The command came over a simulated second ago: a timeout of 0.2 s ends it at once.
     assert ros.set_parameter('mujoco', 'cmd_vel_timeout', 0.2).successful
-    world.wait_sim(0.5)
+    world.step(250)
     assert abs(turning_rate(world)) < 0.05, 'tinybot kept turning after its command lapsed'
 
 
