@@ -43,6 +43,11 @@ POSE_FLAGS = ('x', 'y', 'z', 'R', 'P', 'Y')
 # As robot_state_publisher publishes robot_description: the last one, kept for late joiners.
 DESCRIPTION_QOS = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
                              durability=DurabilityPolicy.TRANSIENT_LOCAL)
+# Said after a refused -file path: the world's rule, and what a user of Gazebo's create can do.
+FILE_NOTE = ('create: note: -file is read by the world, and the world reads files only in the '
+             "installed packages' share folders (it serves every process on the graph, so it "
+             'reads no file a request names elsewhere); install the file with its package, or '
+             'give its XML with -string "$(cat FILE)" if it names no file beside it (meshes)')
 # Wall time between two messages that say what create is waiting for, in s.
 WAITING_PERIOD = 5.0
 USAGE = ('usage: create [-world WORLD] [-file FILE | -param PARAM | -string XML | -topic TOPIC] '
@@ -107,6 +112,8 @@ class Create(Node):
                       for name, default in FLAGS.items() if name != 'param'}
         self.world_name = parameters['world'] or flags.get('world', '')
         self.source = self._source(parameters, flags)
+        self.file_path_given = self.source[0] == 'uri' and '://' not in (
+            parameters['file'] or flags.get('file', ''))
         # A parameter that is not 0 wins over its flag, as in create.
         self.pose = [parameters[name] or flags.get(name, 0.0) for name in POSE_FLAGS]
         self.entity_name = parameters['name'] or flags.get('name', '')
@@ -182,6 +189,8 @@ class Create(Node):
         if response.result.result != Result.RESULT_OK:
             print(f'create: the world did not spawn it: {response.result.error_message}',
                   file=sys.stderr)
+            if self.file_path_given:
+                print(FILE_NOTE, file=sys.stderr)
             return 1
         self.get_logger().info(f'spawned {response.entity_name!r}')
         return 0

@@ -93,6 +93,10 @@ def test_a_refused_spawn_exits_1_with_the_worlds_reason(world):
     outside = run_create(world, '-file', '/etc/hostname')
     assert outside.returncode == 1
     assert 'outside the share folders of the installed packages' in outside.stderr
+    # The rule is the world's: create says it, and what a user can do instead.
+    assert 'create: note: -file is read by the world' in outside.stderr
+    assert '-string "$(cat FILE)"' in outside.stderr
+    assert 'note' not in run_create(world, '-file', 'file:///etc/hostname').stderr
 
 
 def test_create_without_a_robot_or_with_another_world_exits_1_saying_why(world):

@@ -3,9 +3,12 @@ A Gazebo-style launch under launch_testing: the world, create and parameter_brid
 
 The launch description is shaped as a Jazzy Gazebo launch file is (gz_sim, create, the
 bridge), with the world node in place of Gazebo and this package's create and
-parameter_bridge in place of ros_gz's: create spawns a robot from an installed file into an
-empty world and ends with status 0, the bridge's mappings are applied in the world while it
-runs, and the robot drives on cmd_vel and scans. launch and launch_testing come with a ROS 2
+parameter_bridge in place of ros_gz's, as TurtleBot3's Jazzy launch brings up its burger: create
+spawns the suite's burger (an SDF model with gz-sim's DiffDrive, JointStatePublisher, a lidar
+and an IMU) and a wall 1.45 m ahead of it into an empty world and ends with status 0, the
+bridge's mappings (turtlebot3_burger_bridge.yaml's entries) are applied in the world while it
+runs, and the robot reads the wall in its scan and drives on the bridged cmd_vel, a
+TwistStamped. launch and launch_testing come with a ROS 2
 Jazzy install, not with the PyPI wheels: there this file skips.
 """
 
@@ -14,8 +17,7 @@ import tempfile
 import time
 import unittest
 
-from ament_index_python.packages import get_package_share_directory
-from geometry_msgs.msg import Twist
+from geometry_msgs.msg import TwistStamped
 from nav_msgs.msg import Odometry
 import pytest
 import rclpy
@@ -34,29 +36,54 @@ except ImportError:
 # A busy machine may take this long to start the world and spawn the robot.
 START_UP_TIMEOUT = 60.0
 PACKAGE = 'service_tutorial'
+BURGER = os.path.join(os.path.dirname(__file__), '..', 'models', 'sdf', 'models', 'burger',
+                      'model.sdf')
+# The face of a static wall, m ahead on x; the burger's lidar stands 0.032 m behind its origin.
+WALL = 1.45
+LIDAR_X = -0.032
+WALL_SDF = """<sdf version="1.9"><model name="wall"><static>true</static><link name="wall">
+<collision name="wall"><geometry><box><size>0.1 4 1</size></box></geometry></collision>
+</link></model></sdf>"""
+# turtlebot3_simulations' Jazzy turtlebot3_burger_bridge.yaml, less its clock (the world
+# publishes /clock itself).
 BRIDGE_YAML = """\
-- ros_topic_name: "cmd_vel"
-  gz_topic_name: "/model/tb/cmd_vel"
-  ros_type_name: "geometry_msgs/msg/TwistStamped"
-  gz_type_name: "gz.msgs.Twist"
-  direction: ROS_TO_GZ
+- {ros_topic_name: joint_states, gz_topic_name: joint_states,
+   ros_type_name: sensor_msgs/msg/JointState, gz_type_name: gz.msgs.Model,
+   direction: GZ_TO_ROS}
+- {ros_topic_name: odom, gz_topic_name: odom, ros_type_name: nav_msgs/msg/Odometry,
+   gz_type_name: gz.msgs.Odometry, direction: GZ_TO_ROS}
+- {ros_topic_name: tf, gz_topic_name: tf, ros_type_name: tf2_msgs/msg/TFMessage,
+   gz_type_name: gz.msgs.Pose_V, direction: GZ_TO_ROS}
+- {ros_topic_name: cmd_vel, gz_topic_name: cmd_vel,
+   ros_type_name: geometry_msgs/msg/TwistStamped, gz_type_name: gz.msgs.Twist,
+   direction: ROS_TO_GZ}
+- {ros_topic_name: imu, gz_topic_name: imu, ros_type_name: sensor_msgs/msg/Imu,
+   gz_type_name: gz.msgs.IMU, direction: GZ_TO_ROS}
+- {ros_topic_name: scan, gz_topic_name: scan, ros_type_name: sensor_msgs/msg/LaserScan,
+   gz_type_name: gz.msgs.LaserScan, direction: GZ_TO_ROS}
 """
 
 
 @pytest.mark.launch_test
 def generate_test_description():
-    """Launch an empty world, spawn the lesson's tinybot with create, and run a bridge."""
-    config = os.path.join(tempfile.mkdtemp(prefix='gz_launch_'), 'tb_bridge.yaml')
+    """Launch an empty world, spawn the burger and a wall with create, and run its bridge."""
+    config = os.path.join(tempfile.mkdtemp(prefix='gz_launch_'), 'turtlebot3_burger_bridge.yaml')
     with open(config, 'w', encoding='utf-8') as config_file:
         config_file.write(BRIDGE_YAML)
-    robot = os.path.join(get_package_share_directory(PACKAGE), 'models', 'tinybot.urdf')
+    with open(BURGER, encoding='utf-8') as burger_file:
+        burger = burger_file.read()
     world = Node(package=PACKAGE, executable='mujoco_world', output='screen',
                  parameters=[{'world': 'empty', 'real_time_factor': 0.0}])
+    # -string, as the suite's burger is no installed file (create -file reads package shares).
     create = Node(package=PACKAGE, executable='create', output='screen',
-                  arguments=['-name', 'tb', '-file', robot, '-x', '0.5', '-z', '0.01'])
+                  arguments=['-name', 'burger', '-string', burger, '-z', '0.01'])
+    create_wall = Node(package=PACKAGE, executable='create', output='screen',
+                       arguments=['-name', 'wall', '-string', WALL_SDF,
+                                  '-x', str(WALL + 0.05), '-z', '0.5'])
     bridge = Node(package=PACKAGE, executable='parameter_bridge', output='screen',
                   parameters=[{'config_file': config}])
-    return LaunchDescription([world, create, bridge, launch_testing.actions.ReadyToTest()]), {
+    return LaunchDescription([world, create, create_wall, bridge,
+                              launch_testing.actions.ReadyToTest()]), {
         'world': world, 'create': create, 'bridge': bridge}
 
 
@@ -85,30 +112,38 @@ class TestTheGazeboStyleLaunch(unittest.TestCase):
         return predicate()
 
     def test_create_spawns_the_robot_and_ends_with_status_0(self, proc_info, proc_output, create):
-        proc_output.assertWaitFor("spawned 'tb'", process=create, timeout=START_UP_TIMEOUT)
+        proc_output.assertWaitFor("spawned 'burger'", process=create,
+                                  timeout=START_UP_TIMEOUT)
         proc_info.assertWaitForShutdown(process=create, timeout=START_UP_TIMEOUT)
         launch_testing.asserts.assertExitCodes(proc_info, process=create)
 
     def test_the_world_applies_the_bridges_mappings(self, proc_output, world):
-        proc_output.assertWaitFor('bridge /ros_gz_bridge: 1 mapping(s) applied', process=world,
+        proc_output.assertWaitFor('bridge /ros_gz_bridge: 6 mapping(s) applied', process=world,
                                   timeout=START_UP_TIMEOUT)
 
-    def test_the_robot_drives_on_cmd_vel_and_scans(self):
+    def test_the_robot_scans_the_wall_and_drives_on_the_bridged_cmd_vel(self):
         odometry, scans = [], []
         self.node.create_subscription(Odometry, '/odom', odometry.append, 10)
         self.node.create_subscription(LaserScan, '/scan', scans.append, 10)
-        self.assertTrue(self.spin_until(lambda: odometry and scans, START_UP_TIMEOUT),
-                        'no odometry or scan')
+        # A scan that sees the wall: the wall may come after the robot.
+        self.assertTrue(self.spin_until(lambda: odometry and scans and scans[-1].ranges[0] < 3,
+                                        START_UP_TIMEOUT),
+                        f'{len(odometry)} odometry messages, {len(scans)} scans, the last '
+                        f'reading {scans[-1].ranges[0] if scans else None} m ahead')
         start = odometry[-1].pose.pose.position.x
-        command = self.node.create_publisher(Twist, '/cmd_vel', 10)
-        forward = Twist()
-        forward.linear.x = 0.3
+        # The beams about straight ahead (0 rad, and 1 degree either side), 1 cm noise each.
+        ahead = [scans[-1].ranges[i] for i in (-1, 0, 1)]
+        expected = WALL - (start + LIDAR_X)
+        print(f'\nburger: the wall {expected:.4f} m ahead reads {sum(ahead) / 3:.4f} m')
+        self.assertAlmostEqual(sum(ahead) / 3, expected, delta=0.02)
+        command = self.node.create_publisher(TwistStamped, '/cmd_vel', 10)
+        forward = TwistStamped()
+        forward.twist.linear.x = 0.2
 
         def moved():
             command.publish(forward)
             return odometry[-1].pose.pose.position.x - start > 0.1
         self.assertTrue(self.spin_until(moved, START_UP_TIMEOUT), 'the robot did not drive')
-        self.assertGreater(len(scans[-1].ranges), 0)
 
 
 @launch_testing.post_shutdown_test()

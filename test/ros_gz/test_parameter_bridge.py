@@ -4,9 +4,13 @@ parameter_bridge and image_bridge: a bridge's mappings hold in the world while i
 The process is the point (its command line, its life), so each bridge runs as an installed
 executable beside a world of its own (SimulatedWorld); what the world serves each gz topic as
 is read from its bridge table (node.gz_bridge), which its gz faces make their topics from.
-Waits are for events: the table changing, the process ending.
+Waits are for events: the table changing, the process ending. With robots spawned (the suite's
+burger and surveyor, gz-sim systems and sensors), the world's real topics are read on the graph
+and the robots are stepped on simulated time: they drive on the bridged commands and their
+sensors publish on the bridged names.
 """
 
+import math
 import os
 import signal
 import subprocess
@@ -16,6 +20,7 @@ from nav_msgs.msg import Odometry
 from programs import program_path
 import pytest
 from rclpy.node import Node
+from repository import read_file, TEST_MODELS
 from sensor_msgs.msg import CameraInfo, Image, LaserScan
 from service_tutorial.testing.simulated_world import SimulatedWorld
 from service_tutorial.world_node.bridge_channel import bridge_message, BRIDGES_QOS
@@ -50,14 +55,66 @@ BURGER_YAML = f"""\
   ros_type_name: "sensor_msgs/msg/Image"
   gz_type_name: "gz.msgs.Twist"
 """
+BURGER = os.path.join(TEST_MODELS, 'sdf', 'models', 'burger', 'model.sdf')
+SURVEYOR = os.path.join(TEST_MODELS, 'sdf', 'models', 'surveyor', 'model.sdf')
+SURVEYOR_SENSORS = '/world/empty/model/surveyor/link/chassis/sensor/'
+# turtlebot3_simulations' Jazzy turtlebot3_burger_bridge.yaml as its entries stand (relative
+# names, gz names as the burger's systems and sensors give them), less its clock.
+TURTLEBOT3_BRIDGE_YAML = """\
+- ros_topic_name: "joint_states"
+  gz_topic_name: "joint_states"
+  ros_type_name: "sensor_msgs/msg/JointState"
+  gz_type_name: "gz.msgs.Model"
+  direction: GZ_TO_ROS
+- ros_topic_name: "odom"
+  gz_topic_name: "odom"
+  ros_type_name: "nav_msgs/msg/Odometry"
+  gz_type_name: "gz.msgs.Odometry"
+  direction: GZ_TO_ROS
+- ros_topic_name: "tf"
+  gz_topic_name: "tf"
+  ros_type_name: "tf2_msgs/msg/TFMessage"
+  gz_type_name: "gz.msgs.Pose_V"
+  direction: GZ_TO_ROS
+- ros_topic_name: "cmd_vel"
+  gz_topic_name: "cmd_vel"
+  ros_type_name: "geometry_msgs/msg/TwistStamped"
+  gz_type_name: "gz.msgs.Twist"
+  direction: ROS_TO_GZ
+- ros_topic_name: "imu"
+  gz_topic_name: "imu"
+  ros_type_name: "sensor_msgs/msg/Imu"
+  gz_type_name: "gz.msgs.IMU"
+  direction: GZ_TO_ROS
+- ros_topic_name: "scan"
+  gz_topic_name: "scan"
+  ros_type_name: "sensor_msgs/msg/LaserScan"
+  gz_type_name: "gz.msgs.LaserScan"
+  direction: GZ_TO_ROS
+"""
 
 
 @pytest.fixture(scope='module')
 def world():
     """Start a paused world on simulation time, as launch files start it, for the bridges."""
-    simulated = SimulatedWorld(use_sim_time=True)
+    simulated = SimulatedWorld(use_sim_time=True, world='empty')
+    simulated.user = simulated.add_node(Node('bridge_user', context=simulated.context))
     yield simulated
     simulated.close()
+
+
+@pytest.fixture
+def robot(world):
+    """Spawn a robot of the suite into the world, settled on its wheels; delete it after."""
+    names = []
+
+    def spawn(name, path):
+        world.spawn_entity(name, read_file(path))
+        names.append(name)
+        world.step(round(0.3 / world.timestep))
+    yield spawn
+    for name in names:
+        world.delete_entity(name)
 
 
 class Bridge:
@@ -183,3 +240,121 @@ def test_a_message_that_is_not_a_bridges_mappings_changes_nothing(world):
     assert served(world, '/cmd_vel', 'gz.msgs.Twist', ROS_TO_GZ) == ('/cmd_vel', Twist)
     node.destroy_publisher(publisher)
     assert world.wait_for(lambda: not world.world_node.gz_bridge.owners, timeout=EVENT_TIMEOUT)
+
+
+def world_types(world, topic):
+    """Return (types the world publishes on topic, types it subscribes to on it), on the graph."""
+    def types(infos):
+        return {info.topic_type for info in infos if info.node_name != 'bridge_user'}
+    user = world.user
+    return (types(user.get_publishers_info_by_topic(topic)),
+            types(user.get_subscriptions_info_by_topic(topic)))
+
+
+def wait_graph(world, expected):
+    """Wait until the graph shows the world's {topic: (published types, subscribed types)}."""
+    def graph():
+        return {topic: world_types(world, topic) for topic in expected}
+    assert world.wait_for(lambda: graph() == expected, timeout=EVENT_TIMEOUT), {
+        topic: types for topic, types in graph().items() if types != expected[topic]}
+    return True
+
+
+def listen(world, msg_type, topic):
+    """Keep what comes on a topic from now on; return the list."""
+    received = []
+    world.user.create_subscription(msg_type, topic, received.append, 100)
+    return received
+
+
+def drive(world, name, msg_type, topic, seconds=1.0):
+    """Command 0.2 m/s on a topic for seconds of simulated time; return the distance driven."""
+    publisher = world.user.create_publisher(msg_type, topic, 10)
+    assert world.wait_for(lambda: publisher.get_subscription_count() > 0,
+                          timeout=EVENT_TIMEOUT), f'nobody takes {topic}'
+    start = world.entity_state(name).pose.position
+    forward = msg_type()
+    (forward.twist if msg_type is TwistStamped else forward).linear.x = 0.2
+    publisher.publish(forward)
+    world.step(round(seconds / world.timestep))
+    publisher.publish(msg_type())
+    world.step(round(0.5 / world.timestep))  # it stops
+    world.user.destroy_publisher(publisher)
+    end = world.entity_state(name).pose.position
+    return math.hypot(end.x - start.x, end.y - start.y)
+
+
+STRING = 'std_msgs/msg/String'
+TWIST = 'geometry_msgs/msg/Twist'
+TWIST_STAMPED = 'geometry_msgs/msg/TwistStamped'
+SCAN_TYPE = 'sensor_msgs/msg/LaserScan'
+ODOMETRY_TYPE = 'nav_msgs/msg/Odometry'
+TF_TYPE = 'tf2_msgs/msg/TFMessage'
+NOTHING = (set(), set())
+
+
+def test_turtlebot3s_bridge_yaml_renames_and_retypes_the_burgers_real_topics(
+        world, robot, tmp_path):
+    robot('burger', BURGER)
+    # (/tf is the world's own topic too, whichever robot is bridged how.)
+    gz_defaults = {'/cmd_vel': (set(), {TWIST}), '/scan': ({SCAN_TYPE}, set()),
+                   '/odom': ({ODOMETRY_TYPE}, set())}
+    assert wait_graph(world, gz_defaults)
+    config = tmp_path / 'turtlebot3_burger_bridge.yaml'
+    config.write_text(TURTLEBOT3_BRIDGE_YAML)
+    # Started in a namespace, as a multi-robot launch starts it: the relative ROS names follow.
+    bridge = Bridge(world, 'parameter_bridge', '--ros-args', '-r', '__ns:=/tb3',
+                    '-p', f'config_file:={config}')
+    assert wait_graph(world, {
+        '/tb3/cmd_vel': (set(), {TWIST_STAMPED}), '/tb3/scan': ({SCAN_TYPE}, set()),
+        '/tb3/odom': ({ODOMETRY_TYPE}, set()), '/tb3/tf': ({TF_TYPE}, set()),
+        **{topic: NOTHING for topic in gz_defaults}})
+    scans = listen(world, LaserScan, '/tb3/scan')
+    odometry = listen(world, Odometry, '/tb3/odom')
+    travelled = drive(world, 'burger', TwistStamped, '/tb3/cmd_vel')
+    print(f'\nburger: 0.2 m/s on the bridged /tb3/cmd_vel (TwistStamped) for 1 s travelled '
+          f'{travelled:.4f} m')
+    assert travelled == pytest.approx(0.2 - 0.2 * 0.2 / 2.0, abs=0.01)  # 1 m/s^2 up to speed
+    assert scans and len(scans[-1].ranges) == 360 and scans[-1].header.frame_id == 'base_scan'
+    assert odometry[-1].pose.pose.position.x == pytest.approx(travelled, abs=0.01)
+    status, logged = bridge.stop()
+    assert status == 0, logged
+    assert wait_graph(world, {**gz_defaults, '/tb3/cmd_vel': NOTHING, '/tb3/scan': NOTHING})
+    assert drive(world, 'burger', Twist, '/cmd_vel') > 0.15, 'no drive on the default again'
+
+
+def test_command_line_mappings_with_remappings_move_the_surveyors_topics(world, robot):
+    robot('surveyor', SURVEYOR)
+    cmd_vel, scan = '/model/surveyor/cmd_vel', SURVEYOR_SENSORS + 'front_lidar/scan'
+    # ros_gz's way to give a gz topic another ROS name: the argument names the gz topic, a
+    # remapping moves the ROS side.
+    bridge = Bridge(world, 'parameter_bridge',
+                    f'{cmd_vel}@geometry_msgs/msg/TwistStamped]gz.msgs.Twist',
+                    f'{scan}@sensor_msgs/msg/LaserScan[gz.msgs.LaserScan',
+                    '--ros-args', '-r', f'{cmd_vel}:=/cmd_vel', '-r', f'{scan}:=/front_scan')
+    assert wait_graph(world, {'/cmd_vel': (set(), {TWIST_STAMPED}),
+                              '/front_scan': ({SCAN_TYPE}, set()),
+                              cmd_vel: NOTHING, scan: NOTHING})
+    scans = listen(world, LaserScan, '/front_scan')
+    travelled = drive(world, 'surveyor', TwistStamped, '/cmd_vel')
+    print(f'\nsurveyor: 0.2 m/s on the bridged /cmd_vel for 1 s travelled {travelled:.4f} m')
+    assert 0.19 <= travelled <= 0.21
+    assert scans and len(scans[-1].ranges) == 181
+    assert bridge.stop()[0] == 0
+    assert wait_graph(world, {cmd_vel: (set(), {TWIST}), scan: ({SCAN_TYPE}, set()),
+                              '/cmd_vel': NOTHING, '/front_scan': NOTHING})
+
+
+def test_image_bridge_serves_a_depth_camera_under_the_name_it_is_given(world, robot):
+    robot('surveyor', SURVEYOR)
+    depth = SURVEYOR_SENSORS + 'depth/depth_image'
+    bridge = Bridge(world, 'image_bridge', depth, '--ros-args', '-r', f'{depth}:=/depth')
+    assert wait_graph(world, {'/depth': ({'sensor_msgs/msg/Image'}, set()), depth: NOTHING})
+    images = listen(world, Image, '/depth')
+    world.step(round(0.5 / world.timestep))  # the camera runs at 5 Hz
+    # It draws in the background: its frame comes once drawn, a tick of the world later.
+    assert world.wait_for(lambda: images, timeout=EVENT_TIMEOUT), 'no image on /depth'
+    assert (images[-1].width, images[-1].height, images[-1].encoding) == (
+        64, 48, '32FC1')
+    assert bridge.stop()[0] == 0
+    assert wait_graph(world, {depth: ({'sensor_msgs/msg/Image'}, set()), '/depth': NOTHING})
