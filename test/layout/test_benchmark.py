@@ -19,6 +19,12 @@ import world_benchmark  # noqa: E402
 
 # Table key -> expected number of rows for the QUICK configuration.
 QUICK = world_benchmark.QUICK
+# The gz section: a 360-beam and a 16-row lidar and a depth camera against bare MuJoCo; three
+# Burgers' start-up (wall and CPU), time to spawned, memory, real-time factor and scans
+# received, three of them with a limit, and all three sensor rows and those three in the
+# targets.
+GZ_ROWS = {'gz_sensors': 3, 'gz_burgers': 6}
+GZ_TARGETS = 3 + 3
 EXPECTED_ROWS = {
     'round_trips': 4,
     'spawn_growth': len(QUICK.growth_counts),
@@ -29,7 +35,7 @@ EXPECTED_ROWS = {
     'targets': (1 + 2 * len(QUICK.growth_counts) + 6 * len(QUICK.cost_counts) + 1
                 + 2 * len(QUICK.robot_counts)
                 + (report.CPU_TARGET_ROBOTS in QUICK.robot_counts) + 1 + 1 + 4 + 3 + 3
-                + len(QUICK.cost_counts)),
+                + len(QUICK.cost_counts) + GZ_TARGETS),
     'core': 2,
     # cold spawn, warm spawn and delete of two robots per world size, and the box sequence
     'spawn_cost': 6 * len(QUICK.cost_counts) + 1,
@@ -46,6 +52,7 @@ EXPECTED_ROWS = {
     'world_loading': 3,
     # the web page: no browser against web:=false, free-running and in real time; one browser
     'web': 3,
+    **GZ_ROWS,
 }
 
 
@@ -53,6 +60,8 @@ def check_cell(table, heading, fmt, value):
     """Numeric columns hold finite numbers, 'within' columns booleans, text columns text."""
     where = f'{table.key}[{heading}]'
     if value is None and heading in ('limit', 'within'):  # a row that only informs
+        return
+    if value is None and heading.endswith('(elsewhere)'):  # no reference for this row
         return
     if heading in ('within', 'holds') or heading.endswith(' within'):
         assert isinstance(value, bool), where
@@ -92,6 +101,25 @@ def test_quick_benchmark_fills_every_table(rclpy_session, tmp_path):
     assert set(document['tables']) == set(expected)
     for key, table in document['tables'].items():
         assert all(len(row) == len(table['columns']) for row in table['rows']), key
+
+
+@pytest.mark.ros
+def test_the_gz_section_alone_fills_its_tables(rclpy_session, tmp_path):
+    config = world_benchmark.Config(**QUICK.__dict__)
+    config.log_path = str(tmp_path / 'nodes.log')
+    tables = world_benchmark.run(config, sections=('gz',), report=lambda _: None)
+
+    assert {table.key: len(table.rows) for table in tables} == {**GZ_ROWS,
+                                                                 'targets': GZ_TARGETS}
+    for table in tables:
+        for row in table.rows:
+            for value, (heading, fmt) in zip(row, table.columns):
+                check_cell(table, heading, fmt, value)
+    burgers = next(table for table in tables if table.key == 'gz_burgers')
+    start_up, cpu, spawned, memory, factor, scans = (row[2] for row in burgers.rows)
+    assert 0.0 < start_up <= spawned and cpu > 0.0 and memory > 0.0 and factor > 0.0
+    assert scans > 0.0
+    assert [row[3] for row in burgers.rows] == [4.3, None, 4.3, 1.45, 0.66, None]
 
 
 def test_command_line_options():
