@@ -5,11 +5,11 @@ The gz lidar and depth camera are timed against their raw MuJoCo cost, as the Cl
 rows are (sensors.py). Three Burgers in an SDF world of walls and pillars (worlds/ beside this
 file) are started as a TurtleBot3 launch starts them: mujoco_world with world:= the SDF file
 and one create per robot at the same time, each Burger's SDF with its topics under its own name
-as TurtleBot3's multi-robot launch writes them. create gives it with -string, since the world
-spawns files only from installed packages and the suite's Burger is not installed. Their
-start-up, the world process's resident memory and the real-time factor they reach
-free-running are printed beside what Robotnik's public simulator benchmark (2025) measured for
-Gazebo Harmonic headless on another machine.
+(tb3_0/cmd_vel), as multi-robot TurtleBot3 setups give each robot its own. create gives it
+with -string, since the world spawns files only from installed packages and the suite's
+Burger is not installed. Their start-up, the world process's resident memory and the
+real-time factor they reach free-running are printed beside what Robotnik's public simulator
+benchmark (2025) measured for Gazebo Harmonic headless on another machine.
 """
 
 import copy
@@ -197,7 +197,7 @@ def gz_sensor_table(config):
 
 
 def burger_sdf(name):
-    """Return the Burger's SDF with its topics below its name, as TurtleBot3's launch has them."""
+    """Return the Burger's SDF named name, with its topics below that name (tb3_0/scan)."""
     text = sdf_text(BURGER).replace('<model name="burger">', f'<model name="{name}">')
     for topic in BURGER_TOPICS:
         text = text.replace(f'<topic>{topic}</topic>', f'<topic>{name}/{topic}</topic>')
