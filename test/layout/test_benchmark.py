@@ -17,14 +17,14 @@ import report  # noqa: E402, I100  (benchmarks/ is not a package)
 import web_page  # noqa: E402
 import world_benchmark  # noqa: E402
 
-# Table key -> expected number of rows for the QUICK configuration.
 QUICK = world_benchmark.QUICK
 # The gz section: a 360-beam and a 16-row lidar and a depth camera against bare MuJoCo; three
 # Burgers' start-up (wall and CPU), time to spawned, memory, real-time factor (per wall and
-# per CPU second) and scans received, three of them with a limit, and all three sensor rows and those three in the
-# targets.
+# per CPU second) and scans received, three of them with a limit. The targets: the three
+# sensor rows and those three.
 GZ_ROWS = {'gz_sensors': 3, 'gz_burgers': 7}
 GZ_TARGETS = 3 + 3
+# Table key -> expected number of rows for the QUICK configuration.
 EXPECTED_ROWS = {
     'round_trips': 4,
     'spawn_growth': len(QUICK.growth_counts),
@@ -109,8 +109,8 @@ def test_the_gz_section_alone_fills_its_tables(rclpy_session, tmp_path):
     config.log_path = str(tmp_path / 'nodes.log')
     tables = world_benchmark.run(config, sections=('gz',), report=lambda _: None)
 
-    assert {table.key: len(table.rows) for table in tables} == {**GZ_ROWS,
-                                                                 'targets': GZ_TARGETS}
+    expected = {**GZ_ROWS, 'targets': GZ_TARGETS}
+    assert {table.key: len(table.rows) for table in tables} == expected
     for table in tables:
         for row in table.rows:
             for value, (heading, fmt) in zip(row, table.columns):
