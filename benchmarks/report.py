@@ -144,6 +144,14 @@ def targets(tables):
     if 'web' in by_key:
         for row in by_key['web'].rows:
             rows.append([f'{row[0]} ratio, {row[1]} robot(s)', row[4], row[5], row[6]])
+    if 'gz_sensors' in by_key:
+        for row in by_key['gz_sensors'].rows:
+            rows.append([f'{row[0]}, ratio to bare MuJoCo', row[3], row[4], row[5]])
+    if 'gz_burgers' in by_key:
+        for row in by_key['gz_burgers'].rows:
+            if row[4] is not None:
+                rows.append([f'{row[0]}, against Gazebo measured elsewhere', row[2], row[4],
+                             row[5]])
     return Table('targets', 'Targets', [('target', ''), ('measured', '.3f'), ('limit', '.3f'),
                                         ('holds', '')], rows)
 

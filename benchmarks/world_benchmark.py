@@ -20,7 +20,9 @@ as JSON (output/benchmark.json unless --json says otherwise). What runs where:
   LoadWorld): the world node in this process, paused, against MuJoCo's own batch, bare mj_step
   and the World;
 - the web page's cost: mujoco_world as a process with web:=false and web:=true, and with one
-  headless Chromium on its page.
+  headless Chromium on its page;
+- gz-sim's lidar and depth camera in a World in this process against bare MuJoCo calls, and
+  three Burgers started with world:= and create, beside Gazebo Harmonic's published figures.
 
 Run it with scripts/benchmark [--quick] [--json PATH].
 """
@@ -35,6 +37,7 @@ import time
 from answers import answers_table
 from camera import camera_table
 from core import core_table
+from gz_sim import burger_world_table, gz_sensor_table
 from harness import BenchmarkError, Observer
 from lesson_services import lesson_services_table
 from report import machine, targets, write_json
@@ -108,7 +111,7 @@ QUICK = Config(calls=5, growth_counts=(1, 2), growth_calls=3, lesson_calls=2,
 
 
 SECTIONS = ('round_trips', 'spawn_growth', 'speed', 'startup', 'turning', 'core', 'spawn_cost',
-            'camera', 'sensors', 'answers', 'standard', 'web')
+            'camera', 'sensors', 'answers', 'standard', 'web', 'gz')
 
 
 def run(config, *, sections=SECTIONS, report=print):
@@ -125,6 +128,7 @@ def run(config, *, sections=SECTIONS, report=print):
     # a second longer to match a new world (1.9 s against 0.85 s), whatever the world does.
     measurements = {
         'startup': lambda: [startup_table(observer, config)],
+        'gz': lambda: [gz_sensor_table(config), burger_world_table(observer, config)],
         'round_trips': lambda: [round_trip_table(observer, config),
                                 lesson_services_table(observer, config)],
         'spawn_growth': lambda: [growth_table(observer, config)],

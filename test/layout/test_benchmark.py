@@ -17,8 +17,14 @@ import report  # noqa: E402, I100  (benchmarks/ is not a package)
 import web_page  # noqa: E402
 import world_benchmark  # noqa: E402
 
-# Table key -> expected number of rows for the QUICK configuration.
 QUICK = world_benchmark.QUICK
+# The gz section: a 360-beam and a 16-row lidar and a depth camera against bare MuJoCo; three
+# Burgers' start-up (wall and CPU), time to spawned, memory, real-time factor (per wall and
+# per CPU second) and scans received, three of them with a limit. The targets: the three
+# sensor rows and those three.
+GZ_ROWS = {'gz_sensors': 3, 'gz_burgers': 7}
+GZ_TARGETS = 3 + 3
+# Table key -> expected number of rows for the QUICK configuration.
 EXPECTED_ROWS = {
     'round_trips': 4,
     # a warm and a cold spawn and a delete of R2-D2 through the lesson's services
@@ -31,7 +37,7 @@ EXPECTED_ROWS = {
     'targets': (1 + 3 + 2 * len(QUICK.growth_counts) + 6 * len(QUICK.cost_counts) + 1
                 + 2 * len(QUICK.robot_counts)
                 + (report.CPU_TARGET_ROBOTS in QUICK.robot_counts) + 1 + 1 + 4 + 3 + 3
-                + len(QUICK.cost_counts)),
+                + len(QUICK.cost_counts) + GZ_TARGETS),
     'core': 2,
     # cold spawn, warm spawn and delete of two robots per world size, and the box sequence
     'spawn_cost': 6 * len(QUICK.cost_counts) + 1,
@@ -48,6 +54,7 @@ EXPECTED_ROWS = {
     'world_loading': 3,
     # the web page: no browser against web:=false, free-running and in real time; one browser
     'web': 3,
+    **GZ_ROWS,
 }
 
 
@@ -55,6 +62,8 @@ def check_cell(table, heading, fmt, value):
     """Numeric columns hold finite numbers, 'within' columns booleans, text columns text."""
     where = f'{table.key}[{heading}]'
     if value is None and heading in ('limit', 'within'):  # a row that only informs
+        return
+    if value is None and heading.endswith('(elsewhere)'):  # no reference for this row
         return
     if heading in ('within', 'holds') or heading.endswith(' within'):
         assert isinstance(value, bool), where
@@ -94,6 +103,25 @@ def test_quick_benchmark_fills_every_table(rclpy_session, tmp_path):
     assert set(document['tables']) == set(expected)
     for key, table in document['tables'].items():
         assert all(len(row) == len(table['columns']) for row in table['rows']), key
+
+
+@pytest.mark.ros
+def test_the_gz_section_alone_fills_its_tables(rclpy_session, tmp_path):
+    config = world_benchmark.Config(**QUICK.__dict__)
+    config.log_path = str(tmp_path / 'nodes.log')
+    tables = world_benchmark.run(config, sections=('gz',), report=lambda _: None)
+
+    expected = {**GZ_ROWS, 'targets': GZ_TARGETS}
+    assert {table.key: len(table.rows) for table in tables} == expected
+    for table in tables:
+        for row in table.rows:
+            for value, (heading, fmt) in zip(row, table.columns):
+                check_cell(table, heading, fmt, value)
+    burgers = next(table for table in tables if table.key == 'gz_burgers')
+    start_up, cpu, spawned, memory, factor, per_cpu, scans = (row[2] for row in burgers.rows)
+    assert 0.0 < start_up <= spawned and cpu > 0.0 and memory > 0.0
+    assert factor > 0.0 and per_cpu > 0.0 and scans > 0.0
+    assert [row[3] for row in burgers.rows] == [4.3, None, 4.3, 1.45, 0.66, None, None]
 
 
 def test_command_line_options():
