@@ -7,11 +7,18 @@ node is destroyed and rclpy shut down. Errors a program expects are printed as
 '<program>: <error>' on stderr and give exit status 1.
 """
 
+import os
 import sys
+import threading
 
 import rclpy
 from rclpy.executors import ExternalShutdownException
 from rclpy.utilities import remove_ros_args
+
+# Wall time the middleware has to let a stopping program's node go, in s. Fast DDS 2.14 can spin
+# for ever in the participant's destruction (DomainParticipant::set_listener, seen once in about
+# ten stops of a parameter_bridge here); the program then ends anyway, with its own status.
+LEAVING_TIME = 10.0
 
 
 def program_arguments(args=None):
@@ -28,24 +35,39 @@ def run_node(make_node, work, *, args=None, program='', errors=(), interrupted_s
     """
     rclpy.init(args=args)
     node = None
+    status = 1  # an unexpected error's, raised
     try:
         node = make_node()
-        return work(node)
+        status = work(node)
     except errors as error:
         print(f'{program}: {error}', file=sys.stderr)
-        return 1
+        status = 1
     except (KeyboardInterrupt, ExternalShutdownException):
-        return interrupted_status
+        status = interrupted_status
     except Exception:
         # Ctrl-C shuts the context down under a running callback, which then fails: that is
         # the program stopping, not an error of its own.
         if rclpy.ok():
             raise
-        return interrupted_status
+        status = interrupted_status
     finally:
+        leave_anyway = threading.Timer(LEAVING_TIME, _leave, (status,))
+        leave_anyway.daemon = True
+        leave_anyway.start()
         if node is not None:
             node.destroy_node()
         rclpy.try_shutdown()
+        leave_anyway.cancel()
+    return status
+
+
+def _leave(status):
+    """End the process with status now, as main() would have, while rclpy hangs in shutdown."""
+    print(f'{os.path.basename(sys.argv[0])}: the middleware did not let the node go within '
+          f'{LEAVING_TIME:g} s; ending anyway', file=sys.stderr)
+    sys.stdout.flush()
+    sys.stderr.flush()
+    os._exit(status or 0)
 
 
 def spin_node(make_node, *, args=None):
