@@ -7,12 +7,16 @@ What the world node tells the ROS graph besides its services, through real subsc
 import logging
 import signal
 import sys
+import threading
 import time
 
 from geometry_msgs.msg import Twist
 from nav_msgs.msg import Odometry
 import pytest
 from rcl_interfaces.msg import Log
+import rclpy
+from rclpy.context import Context
+from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
@@ -225,13 +229,44 @@ main()
 """
 
 
+class Listener:
+    """A subscription on a DDS participant (rclpy context) of its own, spun in a thread."""
+
+    def __init__(self, msg_type, topic, callback, qos):
+        """Subscribe to topic from now on."""
+        self.context = Context()
+        rclpy.init(context=self.context)
+        self.node = rclpy.create_node('rosout_listener', context=self.context)
+        self.node.create_subscription(msg_type, topic, callback, qos)
+        self.executor = SingleThreadedExecutor(context=self.context)
+        self.executor.add_node(self.node)
+        self.thread = threading.Thread(target=self._spin, daemon=True)
+        self.thread.start()
+
+    def _spin(self):
+        try:
+            self.executor.spin()
+        except ExternalShutdownException:  # close()
+            pass
+
+    def close(self):
+        """Stop spinning and leave the graph."""
+        self.context.try_shutdown()
+        self.thread.join(timeout=30.0)
+        self.executor.shutdown()
+        self.node.destroy_node()
+
+
 @pytest.mark.parametrize('logger_class', ['launch', 'not propagating'])
 def test_the_worlds_logs_reach_rosout_and_the_root_whatever_the_logger_class(
         ros, start_program, logger_class):
     if logger_class == 'launch':
         pytest.importorskip('launch.logging', reason='launch is not installed (not on PyPI)')
     log = []
-    ros.client_node.create_subscription(  # transient local: also what came before it matched
+    # Transient local: also what came before it matched, for /rosout's lifespan of 10 s. On a
+    # participant of its own, which matches a new world at once, where the long run's one takes
+    # longer than that after a whole suite's endpoints.
+    listener = Listener(
         Log, '/rosout', lambda msg: msg.name == 'mujoco' and log.append((msg.level, msg.msg)),
         QoSProfile(depth=1000, durability=DurabilityPolicy.TRANSIENT_LOCAL))
     world = start_program([sys.executable, '-c', WORLD_UNDER_A_LOGGER_CLASS, logger_class],
@@ -251,6 +286,7 @@ def test_the_worlds_logs_reach_rosout_and_the_root_whatever_the_logger_class(
     finally:
         world.send_signal(signal.SIGINT)
         stderr = world.communicate(timeout=30.0)[1]
+        listener.close()
     assert world.returncode == 0, stderr
     root = [line for line in stderr.splitlines() if line.startswith('root logger: ')]
     assert root == [f'root logger: {text}' for text in logged], stderr
