@@ -19,11 +19,9 @@ import sys
 from rclpy.expand_topic_name import expand_topic_name
 from rclpy.node import Node
 from service_tutorial.node_main import program_arguments, spin_node
-from service_tutorial.world_node.bridge_channel import bridge_message, BRIDGES_QOS
-from service_tutorial.world_node.bridge_channel import BRIDGES_TOPIC
+from service_tutorial.world_node.bridge_channel import BridgeAnnouncement
 from service_tutorial.world_node.bridge_config import BridgeConfigError, parse_argument
 from service_tutorial.world_node.bridge_config import read_config_file
-from std_msgs.msg import String
 
 USAGE = """usage: parameter_bridge [topic@ros_type@gz_type ...] [--ros-args -p config_file:=FILE]
 
@@ -52,8 +50,7 @@ class ParameterBridge(Node):
                 f'bridging {mapping["gz_topic_name"]} ({mapping["gz_type_name"]}) and '
                 f'{mapping["ros_topic_name"]} ({mapping["ros_type_name"]}), '
                 f'{mapping["direction"]}')
-        self.bridges_pub = self.create_publisher(String, BRIDGES_TOPIC, BRIDGES_QOS)
-        self.bridges_pub.publish(bridge_message(self.get_fully_qualified_name(), self.mappings))
+        self.announcement = BridgeAnnouncement(self, self.mappings)
 
     def resolved(self, entry):
         """Return an entry as YAML keys with its ROS name as this node resolves it."""

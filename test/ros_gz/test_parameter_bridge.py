@@ -24,7 +24,7 @@ from repository import read_file, TEST_MODELS
 from sensor_msgs.msg import CameraInfo, Image, LaserScan
 from service_tutorial.testing.simulated_world import SimulatedWorld
 from service_tutorial.world_node.bridge_channel import bridge_message, BRIDGES_QOS
-from service_tutorial.world_node.bridge_channel import BRIDGES_TOPIC
+from service_tutorial.world_node.bridge_channel import BridgeAnnouncement, BRIDGES_TOPIC
 from service_tutorial.world_node.gz_bridge import GZ_TO_ROS, ROS_TO_GZ
 from std_msgs.msg import String
 
@@ -117,6 +117,27 @@ def robot(world):
         world.delete_entity(name)
 
 
+@pytest.fixture
+def start_bridge(world):
+    """
+    Start bridge programs beside the world: the fixture starts one and returns its Bridge.
+
+    Whatever a test leaves running is killed after it, and the world is seen to drop its
+    mappings, so that no test meets another's bridge.
+    """
+    bridges = []
+
+    def start(program, *args):
+        bridges.append(Bridge(world, program, *args))
+        return bridges[-1]
+    yield start
+    for bridge in bridges:
+        if bridge.process.poll() is None:
+            bridge.process.kill()
+            bridge.process.communicate()
+    assert world.wait_for(lambda: not world.world_node.gz_bridge.owners, timeout=EVENT_TIMEOUT)
+
+
 class Bridge:
     """An installed bridge program running beside a world, stopped as launch stops it."""
 
@@ -147,11 +168,11 @@ def wait_served(world, expected, *args):
 
 
 def test_a_yaml_file_maps_the_topics_while_the_bridge_runs_and_the_defaults_come_back(
-        world, tmp_path, capfd):
+        world, start_bridge, tmp_path, capfd):
     config = tmp_path / 'turtlebot3_burger_bridge.yaml'
     config.write_text(BURGER_YAML)
     assert served(world, CMD_VEL, 'gz.msgs.Twist', ROS_TO_GZ) == (CMD_VEL, Twist)
-    bridge = Bridge(world, 'parameter_bridge', '--ros-args', '-p', f'config_file:={config}')
+    bridge = start_bridge('parameter_bridge', '--ros-args', '-p', f'config_file:={config}')
     assert wait_served(world, ('/cmd_vel', TwistStamped), CMD_VEL, 'gz.msgs.Twist', ROS_TO_GZ)
     assert served(world, SCAN, 'gz.msgs.LaserScan', GZ_TO_ROS) == ('/scan', LaserScan)
     # Mapped one way, a topic is not served the other.
@@ -171,11 +192,12 @@ def test_a_yaml_file_maps_the_topics_while_the_bridge_runs_and_the_defaults_come
         'serve, left out: /clock (rosgraph_msgs/msg/Clock / gz.msgs.Clock)')
 
 
-def test_command_line_mappings_resolve_in_the_bridges_namespace_and_go_with_it(world):
-    bridge = Bridge(world, 'parameter_bridge',
-                    f'odom@nav_msgs/msg/Odometry[gz.msgs.Odometry@{ODOMETRY}',
-                    f'{CMD_VEL}@geometry_msgs/msg/TwistStamped]gz.msgs.Twist',
-                    '--ros-args', '-r', '__ns:=/burger')
+def test_command_line_mappings_resolve_in_the_bridges_namespace_and_go_with_it(
+        world, start_bridge):
+    bridge = start_bridge('parameter_bridge',
+                          f'odom@nav_msgs/msg/Odometry[gz.msgs.Odometry@{ODOMETRY}',
+                          f'{CMD_VEL}@geometry_msgs/msg/TwistStamped]gz.msgs.Twist',
+                          '--ros-args', '-r', '__ns:=/burger')
     assert wait_served(world, ('/burger/odom', Odometry), ODOMETRY, 'gz.msgs.Odometry',
                        GZ_TO_ROS)
     assert served(world, CMD_VEL, 'gz.msgs.Twist', ROS_TO_GZ) == (CMD_VEL, TwistStamped)
@@ -185,12 +207,13 @@ def test_command_line_mappings_resolve_in_the_bridges_namespace_and_go_with_it(w
     assert served(world, CMD_VEL, 'gz.msgs.Twist', ROS_TO_GZ) == (CMD_VEL, Twist)
 
 
-def test_expand_gz_topic_names_puts_the_yamls_gz_names_in_the_namespace(world, tmp_path):
+def test_expand_gz_topic_names_puts_the_yamls_gz_names_in_the_namespace(
+        world, start_bridge, tmp_path):
     config = tmp_path / 'bridge.yaml'
     config.write_text('- topic_name: cmd_vel\n  ros_type_name: geometry_msgs/msg/Twist\n'
                       '  gz_type_name: gz.msgs.Twist\n  direction: ROS_TO_GZ\n')
-    bridge = Bridge(world, 'parameter_bridge', '--ros-args', '-r', '__ns:=/robot1',
-                    '-p', f'config_file:={config}', '-p', 'expand_gz_topic_names:=true')
+    bridge = start_bridge('parameter_bridge', '--ros-args', '-r', '__ns:=/robot1',
+                          '-p', f'config_file:={config}', '-p', 'expand_gz_topic_names:=true')
     assert wait_served(world, ('/robot1/cmd_vel', Twist), '/robot1/cmd_vel', 'gz.msgs.Twist',
                        ROS_TO_GZ)
     bridge.stop()
@@ -198,8 +221,9 @@ def test_expand_gz_topic_names_puts_the_yamls_gz_names_in_the_namespace(world, t
                        GZ_TO_ROS), 'the default, both ways, came back'
 
 
-def test_image_bridge_serves_each_camera_topic_as_an_image_with_its_camera_info(world):
-    bridge = Bridge(world, 'image_bridge', '/camera/image_raw')
+def test_image_bridge_serves_each_camera_topic_as_an_image_with_its_camera_info(
+        world, start_bridge):
+    bridge = start_bridge('image_bridge', '/camera/image_raw')
     assert world.wait_for(lambda: world.world_node.gz_bridge.owners == ('/image_bridge',),
                           timeout=EVENT_TIMEOUT)
     assert served(world, '/camera/image_raw', 'gz.msgs.Image', GZ_TO_ROS) == (
@@ -210,11 +234,12 @@ def test_image_bridge_serves_each_camera_topic_as_an_image_with_its_camera_info(
     assert world.wait_for(lambda: not world.world_node.gz_bridge.owners, timeout=EVENT_TIMEOUT)
 
 
-def test_a_file_refused_whole_is_named_and_the_arguments_still_apply(world, tmp_path):
+def test_a_file_refused_whole_is_named_and_the_arguments_still_apply(
+        world, start_bridge, tmp_path):
     config = tmp_path / 'broken.yaml'
     config.write_text('- topic_name: [unclosed\n')
-    bridge = Bridge(world, 'parameter_bridge', f'{CMD_VEL}@geometry_msgs/msg/Twist]gz.msgs.Twist',
-                    '--ros-args', '-p', f'config_file:={config}')
+    bridge = start_bridge('parameter_bridge', f'{CMD_VEL}@geometry_msgs/msg/Twist]gz.msgs.Twist',
+                          '--ros-args', '-p', f'config_file:={config}')
     assert world.wait_for(lambda: world.world_node.gz_bridge.owners == ('/ros_gz_bridge',),
                           timeout=EVENT_TIMEOUT)
     assert served(world, CMD_VEL, 'gz.msgs.Twist', GZ_TO_ROS) is None
@@ -233,12 +258,13 @@ def test_a_message_that_is_not_a_bridges_mappings_changes_nothing(world):
     node = world.add_node(Node('not_a_bridge', context=world.context))
     publisher = node.create_publisher(String, BRIDGES_TOPIC, BRIDGES_QOS)
     publisher.publish(String(data='- just: [words'))
-    publisher.publish(bridge_message('/not_a_bridge', [{'topic_name': 'cmd_vel'}]))
+    publisher.publish(bridge_message('/not_a_bridge', 'no token', []))
+    announcement = BridgeAnnouncement(node, [{'topic_name': 'cmd_vel'}])
     assert world.wait_for(lambda: world.world_node.gz_bridge.owners == ('/not_a_bridge',),
                           timeout=EVENT_TIMEOUT)
     # Its one entry lacks the types: nothing of it applies, and it goes when its node goes.
     assert served(world, '/cmd_vel', 'gz.msgs.Twist', ROS_TO_GZ) == ('/cmd_vel', Twist)
-    node.destroy_publisher(publisher)
+    announcement.destroy()
     assert world.wait_for(lambda: not world.world_node.gz_bridge.owners, timeout=EVENT_TIMEOUT)
 
 
@@ -294,7 +320,7 @@ NOTHING = (set(), set())
 
 
 def test_turtlebot3s_bridge_yaml_renames_and_retypes_the_burgers_real_topics(
-        world, robot, tmp_path):
+        world, start_bridge, robot, tmp_path):
     robot('burger', BURGER)
     # (/tf is the world's own topic too, whichever robot is bridged how.)
     gz_defaults = {'/cmd_vel': (set(), {TWIST}), '/scan': ({SCAN_TYPE}, set()),
@@ -303,8 +329,8 @@ def test_turtlebot3s_bridge_yaml_renames_and_retypes_the_burgers_real_topics(
     config = tmp_path / 'turtlebot3_burger_bridge.yaml'
     config.write_text(TURTLEBOT3_BRIDGE_YAML)
     # Started in a namespace, as a multi-robot launch starts it: the relative ROS names follow.
-    bridge = Bridge(world, 'parameter_bridge', '--ros-args', '-r', '__ns:=/tb3',
-                    '-p', f'config_file:={config}')
+    bridge = start_bridge('parameter_bridge', '--ros-args', '-r', '__ns:=/tb3',
+                          '-p', f'config_file:={config}')
     assert wait_graph(world, {
         '/tb3/cmd_vel': (set(), {TWIST_STAMPED}), '/tb3/scan': ({SCAN_TYPE}, set()),
         '/tb3/odom': ({ODOMETRY_TYPE}, set()), '/tb3/tf': ({TF_TYPE}, set()),
@@ -323,15 +349,16 @@ def test_turtlebot3s_bridge_yaml_renames_and_retypes_the_burgers_real_topics(
     assert drive(world, 'burger', Twist, '/cmd_vel') > 0.15, 'no drive on the default again'
 
 
-def test_command_line_mappings_with_remappings_move_the_surveyors_topics(world, robot):
+def test_command_line_mappings_with_remappings_move_the_surveyors_topics(
+        world, start_bridge, robot):
     robot('surveyor', SURVEYOR)
     cmd_vel, scan = '/model/surveyor/cmd_vel', SURVEYOR_SENSORS + 'front_lidar/scan'
     # ros_gz's way to give a gz topic another ROS name: the argument names the gz topic, a
     # remapping moves the ROS side.
-    bridge = Bridge(world, 'parameter_bridge',
-                    f'{cmd_vel}@geometry_msgs/msg/TwistStamped]gz.msgs.Twist',
-                    f'{scan}@sensor_msgs/msg/LaserScan[gz.msgs.LaserScan',
-                    '--ros-args', '-r', f'{cmd_vel}:=/cmd_vel', '-r', f'{scan}:=/front_scan')
+    bridge = start_bridge('parameter_bridge',
+                          f'{cmd_vel}@geometry_msgs/msg/TwistStamped]gz.msgs.Twist',
+                          f'{scan}@sensor_msgs/msg/LaserScan[gz.msgs.LaserScan',
+                          '--ros-args', '-r', f'{cmd_vel}:=/cmd_vel', '-r', f'{scan}:=/front_scan')
     assert wait_graph(world, {'/cmd_vel': (set(), {TWIST_STAMPED}),
                               '/front_scan': ({SCAN_TYPE}, set()),
                               cmd_vel: NOTHING, scan: NOTHING})
@@ -345,10 +372,11 @@ def test_command_line_mappings_with_remappings_move_the_surveyors_topics(world, 
                               '/cmd_vel': NOTHING, '/front_scan': NOTHING})
 
 
-def test_image_bridge_serves_a_depth_camera_under_the_name_it_is_given(world, robot):
+def test_image_bridge_serves_a_depth_camera_under_the_name_it_is_given(
+        world, start_bridge, robot):
     robot('surveyor', SURVEYOR)
     depth = SURVEYOR_SENSORS + 'depth/depth_image'
-    bridge = Bridge(world, 'image_bridge', depth, '--ros-args', '-r', f'{depth}:=/depth')
+    bridge = start_bridge('image_bridge', depth, '--ros-args', '-r', f'{depth}:=/depth')
     assert wait_graph(world, {'/depth': ({'sensor_msgs/msg/Image'}, set()), depth: NOTHING})
     images = listen(world, Image, '/depth')
     world.step(round(0.5 / world.timestep))  # the camera runs at 5 Hz
