@@ -87,6 +87,17 @@ class EncoderOdometry:
         turn = (right_travel - left_travel) / self.wheel_separation
         self.x, self.y, self.yaw = integrate_arc(self.x, self.y, self.yaw, distance, turn)
 
+    def odometry(self, left_speed, right_speed, odometry_frame, robot_base_frame):
+        """Return the pose reckoned so far, with the base's twist at these wheel speeds."""
+        linear_x, angular_z = body_velocity(left_speed, right_speed, self.wheel_separation,
+                                            self.wheel_radius)
+        return Odometry(
+            position=np.array([self.x, self.y, 0.0]),
+            orientation=frames.yaw_quaternion(self.yaw),
+            linear_velocity=np.array([linear_x, 0.0, 0.0]),
+            angular_velocity=np.array([0.0, 0.0, angular_z]),
+            odometry_frame=odometry_frame, robot_base_frame=robot_base_frame)
+
 
 def drive_actuator_name(joint_name):
     """Return the name of the wheel actuator the plugin puts on a diff-drive joint."""
@@ -310,18 +321,9 @@ class DiffDrive(Plugin):
         config = self.config
         if config.odometry_source == ODOMETRY_SOURCE_ENCODER:
             self.integrate_encoders()
-            encoder = self.encoder
             qvel = self.world.data.qvel
-            linear_x, angular_z = body_velocity(
-                *(qvel[address] for address in self._wheel_dof_adr), encoder.wheel_separation,
-                encoder.wheel_radius)
-            return Odometry(
-                position=np.array([encoder.x, encoder.y, 0.0]),
-                orientation=frames.yaw_quaternion(encoder.yaw),
-                linear_velocity=np.array([linear_x, 0.0, 0.0]),
-                angular_velocity=np.array([0.0, 0.0, angular_z]),
-                odometry_frame=config.odometry_frame,
-                robot_base_frame=config.robot_base_frame)
+            return self.encoder.odometry(*(qvel[address] for address in self._wheel_dof_adr),
+                                         config.odometry_frame, config.robot_base_frame)
         base = self.world.body_state(self._base_body_id)
         position, orientation = frames.relative(self.origin_position, self.origin_orientation,
                                                 base.position, base.orientation)

@@ -19,15 +19,14 @@ import math
 
 import mujoco
 import numpy as np
-from service_tutorial.sim import frames
 from service_tutorial.sim import validation
 from service_tutorial.sim.description import MAX_SIZE
 from service_tutorial.sim.description import UrdfError
 from service_tutorial.sim.plugins import gz_names
 from service_tutorial.sim.plugins import Plugin
-from service_tutorial.sim.plugins.diff_drive import add_wheel_servos, body_velocity
+from service_tutorial.sim.plugins.diff_drive import add_wheel_servos
 from service_tutorial.sim.plugins.diff_drive import drive_actuator_name, EncoderOdometry
-from service_tutorial.sim.plugins.diff_drive import MAX_WHEEL_RIM_SPEED, Odometry
+from service_tutorial.sim.plugins.diff_drive import MAX_WHEEL_RIM_SPEED
 from service_tutorial.sim.plugins.gz_parameters import GzParameters
 from service_tutorial.sim.plugins.speed_limits import KINDS, read_limits, SpeedLimits
 from service_tutorial.sim.validation import quoted
@@ -277,16 +276,9 @@ class GzDiffDrive(Plugin):
     def odometry(self):
         """Return the wheel odometry: planar pose from spawn, twist in the base frame."""
         self.integrate_encoders()
-        encoder, qvel = self.encoder, self.world.data.qvel
-        linear_x, angular_z = body_velocity(
-            *(qvel[address] for address in self._wheel_dof_adr), encoder.wheel_separation,
-            encoder.wheel_radius)
-        return Odometry(
-            position=np.array([encoder.x, encoder.y, 0.0]),
-            orientation=frames.yaw_quaternion(encoder.yaw),
-            linear_velocity=np.array([linear_x, 0.0, 0.0]),
-            angular_velocity=np.array([0.0, 0.0, angular_z]),
-            odometry_frame=self.odometry_frame, robot_base_frame=self.base_frame)
+        qvel = self.world.data.qvel
+        return self.encoder.odometry(*(qvel[address] for address in self._wheel_dof_adr),
+                                     self.odometry_frame, self.base_frame)
 
 
 PLUGIN = GzDiffDrive
