@@ -3,14 +3,13 @@
 import time
 
 from harness import NodeProcess, sim_time_sample, wait_for_count, wait_for_world
-from harness import wait_until_gone
+from harness import wait_until_world_gone
 from report import Table
 
 
 def camera_table(observer, config):
     """Measure the pace the world keeps while its camera streams to a subscriber."""
     from sensor_msgs.msg import Image
-    from srv_interfaces.srv import GetModelState
     parameters = {'camera_enabled': True, 'camera_rate': 5.0, 'camera_width': 160,
                   'camera_height': 120}
     with NodeProcess('mujoco_world', node_name='mujoco', parameters=parameters) as process:
@@ -25,7 +24,7 @@ def camera_table(observer, config):
             count = frames[0] - first
         finally:
             observer.node.destroy_subscription(subscription)
-    wait_until_gone(observer, GetModelState, '/mujoco/get_model_state')
+    wait_until_world_gone(observer)
     simulated = max(sim_end - sim_start, 1e-9)
     factor = simulated / (wall_end - wall_start)
     table = Table('camera', 'Camera streaming 160x120 at 5 Hz to a subscriber, '

@@ -3,8 +3,8 @@
 import os
 import time
 
-from harness import BenchmarkError, NodeProcess, sim_time_sample, wait_for_world
-from harness import wait_until, wait_until_gone
+from harness import BenchmarkError, ClosedOnExit, NodeProcess, sim_time_sample
+from harness import wait_for_world, wait_until, wait_until_world_gone
 import mujoco
 from service_tutorial.testing.spawns import spawn_file
 
@@ -145,7 +145,7 @@ class RawFleet:
         return simulated / (now - start), simulated / max(time.thread_time() - cpu_start, 1e-9)
 
 
-class FleetWorld:
+class FleetWorld(ClosedOnExit):
     """
     mujoco_world run as a process with a driving fleet, measured window by window.
 
@@ -198,16 +198,9 @@ class FleetWorld:
 
     def close(self):
         """Stop the process and wait until its services have left the graph."""
-        from srv_interfaces.srv import GetModelState
         if self.fleet is not None:
             self.fleet.destroy()
         for subscription in self._subscriptions:
             self._observer.node.destroy_subscription(subscription)
         self.process.stop()
-        wait_until_gone(self._observer, GetModelState, '/mujoco/get_model_state')
-
-    def __enter__(self):
-        return self
-
-    def __exit__(self, *exc_info):
-        self.close()
+        wait_until_world_gone(self._observer)

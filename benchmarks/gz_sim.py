@@ -18,16 +18,16 @@ import statistics
 import subprocess
 import time
 
-from harness import BenchmarkError, NodeProcess, PACKAGE, sim_time_sample, wait_until
-from harness import wait_until_gone
+from harness import BenchmarkError, ClosedOnExit, NodeProcess, PACKAGE, sim_time_sample
+from harness import wait_until, wait_until_gone, wait_until_world_gone
 import mujoco
 import numpy as np
 from report import median_ms, Table
-from sensors import cpu_time_per_call
+from sensors import ray_sensor_times
 from service_tutorial.sim.rendering import MULTISAMPLED_PIXELS, release_gl_context
 from service_tutorial.sim.rendering import SHADOW_SIZE
 from service_tutorial.testing.spawns import spawn_robot
-from startup import WORLD_SERVICES
+from startup import world_services
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 SDF_MODELS = os.path.join(ROOT, 'test', 'models', 'sdf', 'models')
@@ -68,25 +68,9 @@ def sensor_world(robot, text):
 def lidar_row(title, text, config):
     """Time one scan of the Burger's gz lidar, and one bare mj_multiRay of the same rays."""
     from service_tutorial.sim.plugins.gz_lidar import GzLidar
-    from service_tutorial.sim.plugins.ray_sensor import RAY_GEOM_GROUPS
     world = sensor_world('burger', text)
-    lidar = world.models['burger'].plugin(GzLidar)
-    lidar.set_active(True)
-    world.step(1)
-    model, data, site = world.model, world.data, lidar.site_id
-    samples = lidar.config.samples
-    origin = data.site_xpos[site].copy()
-    directions = (lidar.config.directions @ data.site_xmat[site].reshape(3, 3).T).ravel()
-    geom_ids, distances = np.zeros(samples, dtype=np.int32), np.zeros(samples)
-
-    def bare():
-        mujoco.mj_multiRay(model, data, origin, directions, RAY_GEOM_GROUPS, 1, -1, geom_ids,
-                           distances, None, samples, lidar.config.range_max)
-    scans, rays = [], []
-    for _ in range(3):  # alternating, so both see the same load; the best of each
-        scans.append(cpu_time_per_call(lidar.read, config.scan_repeats))
-        rays.append(cpu_time_per_call(bare, config.scan_repeats))
-    scan, ray = min(scans) * 1e6, min(rays) * 1e6
+    scan, ray = ray_sensor_times(world.models['burger'].plugin(GzLidar), world,
+                                 config.scan_repeats)
     return [title, scan, ray, scan / ray, SENSOR_LIMIT, scan / ray <= SENSOR_LIMIT]
 
 
@@ -94,9 +78,9 @@ class BareDepthRender:
     """MuJoCo's own drawing of a model camera: one render, colour and depth read back."""
 
     def __init__(self, model, camera_id, width, height, near, far):
-        from service_tutorial.sim.rendering import _gl_context_class, prefer_headless_gl
+        from service_tutorial.sim.rendering import gl_context_class, prefer_headless_gl
         prefer_headless_gl()
-        self._gl = _gl_context_class()(1, 1)  # the world's backend; it draws offscreen
+        self._gl = gl_context_class()(1, 1)  # the world's backend; it draws offscreen
         self._gl.make_current()
         # A buffer of the image's size, the sensor's clipping distances (MuJoCo's are fractions
         # of the model's extent), and the world's drawing's shadows and multisampling, so that
@@ -222,7 +206,7 @@ def resident_memory(pid):
     raise BenchmarkError(f'no VmRSS for process {pid}')
 
 
-class BurgerWorld:
+class BurgerWorld(ClosedOnExit):
     """mujoco_world started with the arena by world:=, three Burgers spawned by create."""
 
     def __init__(self, observer):
@@ -256,31 +240,13 @@ class BurgerWorld:
 
     def close(self):
         """Stop every process and wait until the world's services have left the graph."""
-        from srv_interfaces.srv import GetModelState
         for create in self.creates:
             if create.poll() is None:
                 create.kill()
             create.wait()
             create.stderr.close()
         self.process.stop()
-        wait_until_gone(self._observer, GetModelState, '/mujoco/get_model_state')
-
-    def __enter__(self):
-        return self
-
-    def __exit__(self, *exc_info):
-        self.close()
-
-
-def world_services():
-    """Return (type, name) of every /mujoco/ service start-up waits for."""
-    from srv_interfaces.srv import DeleteModel, GetModelList, GetModelState, SetModelState
-    from srv_interfaces.srv import SpawnModel
-    from std_srvs.srv import Empty
-    types = {'spawn_urdf_model': SpawnModel, 'delete_model': DeleteModel,
-             'get_model_list': GetModelList, 'get_model_state': GetModelState,
-             'set_model_state': SetModelState}
-    return [(types.get(name, Empty), '/mujoco/' + name) for name in WORLD_SERVICES]
+        wait_until_world_gone(self._observer)
 
 
 def driving_window(observer, world, seconds):

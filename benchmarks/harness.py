@@ -232,6 +232,22 @@ def wait_until_gone(observer, srv_type, name, *, timeout=10.0):
         time.sleep(0.01)
 
 
+def wait_until_world_gone(observer):
+    """Wait until a stopped world's services have left the graph."""
+    from srv_interfaces.srv import GetModelState
+    wait_until_gone(observer, GetModelState, '/mujoco/get_model_state')
+
+
+class ClosedOnExit:
+    """A with-statement's resource whose close() runs when the block ends, however it ends."""
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc_info):
+        self.close()
+
+
 def wait_for_count(counter, process, what, *, timeout=30.0):
     """Wait until a message counter has counted one; fail early if the process exits."""
     wait_until(lambda: counter[0] != 0, f'no {what} within {timeout} s', timeout=timeout,

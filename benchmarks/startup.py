@@ -13,15 +13,21 @@ WORLD_SERVICES = ('spawn_urdf_model', 'delete_model', 'reset_simulation', 'reset
                   'set_model_state')
 
 
-def startup_table(observer, config):
-    """Process start of mujoco_world until every /mujoco/ service answers."""
+def world_services():
+    """Return (type, name) of every /mujoco/ service start-up waits for."""
     from srv_interfaces.srv import DeleteModel, GetModelList, GetModelState, SetModelState
     from srv_interfaces.srv import SpawnModel
     from std_srvs.srv import Empty
     types = {'spawn_urdf_model': SpawnModel, 'delete_model': DeleteModel,
              'get_model_list': GetModelList, 'get_model_state': GetModelState,
              'set_model_state': SetModelState}
-    services = [(types.get(name, Empty), '/mujoco/' + name) for name in WORLD_SERVICES]
+    return [(types.get(name, Empty), '/mujoco/' + name) for name in WORLD_SERVICES]
+
+
+def startup_table(observer, config):
+    """Process start of mujoco_world until every /mujoco/ service answers."""
+    from srv_interfaces.srv import GetModelList
+    services = world_services()
     for srv_type, name in services:
         observer.client(srv_type, name)  # discovery starts before the process does
     times, cpu_times = [], []

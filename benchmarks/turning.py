@@ -4,7 +4,7 @@ import math
 import time
 
 from harness import BenchmarkError, NodeProcess, sim_time_sample, wait_for_world
-from harness import wait_until_gone
+from harness import wait_until_gone, wait_until_world_gone
 from report import Table, TURNING_TARGET_PERCENT
 
 # After a turn, how long (simulated s) the robot is given to come to rest before measuring.
@@ -69,7 +69,7 @@ def turning_world(real_time_factor):
 
 def run_turns(observer, real_time_factor, points):
     """Run a list of (duration, angular_vel) turns in one fresh world; return the rows."""
-    from srv_interfaces.srv import ControlTurningMessage, GetModelState
+    from srv_interfaces.srv import ControlTurningMessage
     world, server = turning_world(real_time_factor)
     rows = []
     try:
@@ -89,7 +89,7 @@ def run_turns(observer, real_time_factor, points):
     finally:
         server.stop()
         world.stop()
-    wait_until_gone(observer, GetModelState, '/mujoco/get_model_state')
+    wait_until_world_gone(observer)
     wait_until_gone(observer, ControlTurningMessage, '/control_robot_angle')
     return rows
 

@@ -69,7 +69,7 @@ SHADOW_SIZE = 1024
 MULTISAMPLED_PIXELS = 1024 * 1024
 
 
-def _gl_context_class():
+def gl_context_class():
     """Return the GLContext class of the GL backend MuJoCo picked last (see prefer_headless_gl)."""
     for name in ('mujoco.rendering.classic.gl_context', 'mujoco.gl_context'):
         try:
@@ -182,7 +182,7 @@ class Drawing:
         # world, as the world's other windows are, before drawing on the rendering thread.
         if self._gl_context is None:
             prefer_headless_gl()
-            self._gl_context = _gl_context_class()(1, 1)  # draws offscreen, in any size
+            self._gl_context = gl_context_class()(1, 1)  # draws offscreen, in any size
             release_gl_context(self._gl_context)
 
     def _make_context(self, model, width, height):

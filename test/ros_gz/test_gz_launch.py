@@ -13,15 +13,12 @@ Jazzy install, not with the PyPI wheels: there this file skips.
 """
 
 import os
-import tempfile
-import time
 import unittest
 
 from geometry_msgs.msg import TwistStamped
+from launched_graph import LaunchedGraphTestCase
 from nav_msgs.msg import Odometry
 import pytest
-import rclpy
-from rclpy.executors import SingleThreadedExecutor
 from sensor_msgs.msg import LaserScan
 
 try:
@@ -44,32 +41,15 @@ LIDAR_X = -0.032
 WALL_SDF = """<sdf version="1.9"><model name="wall"><static>true</static><link name="wall">
 <collision name="wall"><geometry><box><size>0.1 4 1</size></box></geometry></collision>
 </link></model></sdf>"""
-# turtlebot3_simulations' Jazzy turtlebot3_burger_bridge.yaml, less its clock (the world
+# turtlebot3_simulations' Jazzy bridge file for the burger, less its clock (the world
 # publishes /clock itself).
-BRIDGE_YAML = """\
-- {ros_topic_name: joint_states, gz_topic_name: joint_states,
-   ros_type_name: sensor_msgs/msg/JointState, gz_type_name: gz.msgs.Model,
-   direction: GZ_TO_ROS}
-- {ros_topic_name: odom, gz_topic_name: odom, ros_type_name: nav_msgs/msg/Odometry,
-   gz_type_name: gz.msgs.Odometry, direction: GZ_TO_ROS}
-- {ros_topic_name: tf, gz_topic_name: tf, ros_type_name: tf2_msgs/msg/TFMessage,
-   gz_type_name: gz.msgs.Pose_V, direction: GZ_TO_ROS}
-- {ros_topic_name: cmd_vel, gz_topic_name: cmd_vel,
-   ros_type_name: geometry_msgs/msg/TwistStamped, gz_type_name: gz.msgs.Twist,
-   direction: ROS_TO_GZ}
-- {ros_topic_name: imu, gz_topic_name: imu, ros_type_name: sensor_msgs/msg/Imu,
-   gz_type_name: gz.msgs.IMU, direction: GZ_TO_ROS}
-- {ros_topic_name: scan, gz_topic_name: scan, ros_type_name: sensor_msgs/msg/LaserScan,
-   gz_type_name: gz.msgs.LaserScan, direction: GZ_TO_ROS}
-"""
+BRIDGE_FILE = os.path.join(os.path.dirname(__file__), '..', 'models', 'sdf',
+                           'turtlebot3_burger_bridge.yaml')
 
 
 @pytest.mark.launch_test
 def generate_test_description():
     """Launch an empty world, spawn the burger and a wall with create, and run its bridge."""
-    config = os.path.join(tempfile.mkdtemp(prefix='gz_launch_'), 'turtlebot3_burger_bridge.yaml')
-    with open(config, 'w', encoding='utf-8') as config_file:
-        config_file.write(BRIDGE_YAML)
     with open(BURGER, encoding='utf-8') as burger_file:
         burger = burger_file.read()
     world = Node(package=PACKAGE, executable='mujoco_world', output='screen',
@@ -81,35 +61,16 @@ def generate_test_description():
                        arguments=['-name', 'wall', '-string', WALL_SDF,
                                   '-x', str(WALL + 0.05), '-z', '0.5'])
     bridge = Node(package=PACKAGE, executable='parameter_bridge', output='screen',
-                  parameters=[{'config_file': config}])
+                  parameters=[{'config_file': os.path.abspath(BRIDGE_FILE)}])
     return LaunchDescription([world, create, create_wall, bridge,
                               launch_testing.actions.ReadyToTest()]), {
         'world': world, 'create': create, 'bridge': bridge}
 
 
-class TestTheGazeboStyleLaunch(unittest.TestCase):
+class TestTheGazeboStyleLaunch(LaunchedGraphTestCase):
     """The robot as a Jazzy user meets it once the launch runs."""
 
-    @classmethod
-    def setUpClass(cls):
-        # A context of its own: other tests of the session may hold rclpy's default one.
-        cls.context = rclpy.Context()
-        rclpy.init(context=cls.context)
-        cls.node = rclpy.create_node('gz_launch_test', context=cls.context)
-        cls.executor = SingleThreadedExecutor(context=cls.context)
-        cls.executor.add_node(cls.node)
-
-    @classmethod
-    def tearDownClass(cls):
-        cls.executor.shutdown()
-        cls.node.destroy_node()
-        rclpy.try_shutdown(context=cls.context)
-
-    def spin_until(self, predicate, timeout):
-        deadline = time.monotonic() + timeout
-        while not predicate() and time.monotonic() < deadline:
-            self.executor.spin_once(timeout_sec=0.1)
-        return predicate()
+    node_name = 'gz_launch_test'
 
     def test_create_spawns_the_robot_and_ends_with_status_0(self, proc_info, proc_output, create):
         proc_output.assertWaitFor("spawned 'burger'", process=create,

@@ -58,40 +58,8 @@ BURGER_YAML = f"""\
 BURGER = os.path.join(TEST_MODELS, 'sdf', 'models', 'burger', 'model.sdf')
 SURVEYOR = os.path.join(TEST_MODELS, 'sdf', 'models', 'surveyor', 'model.sdf')
 SURVEYOR_SENSORS = '/world/empty/model/surveyor/link/chassis/sensor/'
-# turtlebot3_simulations' Jazzy turtlebot3_burger_bridge.yaml as its entries stand (relative
-# names, gz names as the burger's systems and sensors give them), less its clock.
-TURTLEBOT3_BRIDGE_YAML = """\
-- ros_topic_name: "joint_states"
-  gz_topic_name: "joint_states"
-  ros_type_name: "sensor_msgs/msg/JointState"
-  gz_type_name: "gz.msgs.Model"
-  direction: GZ_TO_ROS
-- ros_topic_name: "odom"
-  gz_topic_name: "odom"
-  ros_type_name: "nav_msgs/msg/Odometry"
-  gz_type_name: "gz.msgs.Odometry"
-  direction: GZ_TO_ROS
-- ros_topic_name: "tf"
-  gz_topic_name: "tf"
-  ros_type_name: "tf2_msgs/msg/TFMessage"
-  gz_type_name: "gz.msgs.Pose_V"
-  direction: GZ_TO_ROS
-- ros_topic_name: "cmd_vel"
-  gz_topic_name: "cmd_vel"
-  ros_type_name: "geometry_msgs/msg/TwistStamped"
-  gz_type_name: "gz.msgs.Twist"
-  direction: ROS_TO_GZ
-- ros_topic_name: "imu"
-  gz_topic_name: "imu"
-  ros_type_name: "sensor_msgs/msg/Imu"
-  gz_type_name: "gz.msgs.IMU"
-  direction: GZ_TO_ROS
-- ros_topic_name: "scan"
-  gz_topic_name: "scan"
-  ros_type_name: "sensor_msgs/msg/LaserScan"
-  gz_type_name: "gz.msgs.LaserScan"
-  direction: GZ_TO_ROS
-"""
+# turtlebot3_simulations' Jazzy bridge file for the burger, less its clock.
+TURTLEBOT3_BRIDGE = os.path.join(TEST_MODELS, 'sdf', 'turtlebot3_burger_bridge.yaml')
 
 
 @pytest.fixture(scope='module')
@@ -320,17 +288,15 @@ NOTHING = (set(), set())
 
 
 def test_turtlebot3s_bridge_yaml_renames_and_retypes_the_burgers_real_topics(
-        world, start_bridge, robot, tmp_path):
+        world, start_bridge, robot):
     robot('burger', BURGER)
     # (/tf is the world's own topic too, whichever robot is bridged how.)
     gz_defaults = {'/cmd_vel': (set(), {TWIST}), '/scan': ({SCAN_TYPE}, set()),
                    '/odom': ({ODOMETRY_TYPE}, set())}
     assert wait_graph(world, gz_defaults)
-    config = tmp_path / 'turtlebot3_burger_bridge.yaml'
-    config.write_text(TURTLEBOT3_BRIDGE_YAML)
     # Started in a namespace, as a multi-robot launch starts it: the relative ROS names follow.
     bridge = start_bridge('parameter_bridge', '--ros-args', '-r', '__ns:=/tb3',
-                          '-p', f'config_file:={config}')
+                          '-p', f'config_file:={TURTLEBOT3_BRIDGE}')
     assert wait_graph(world, {
         '/tb3/cmd_vel': (set(), {TWIST_STAMPED}), '/tb3/scan': ({SCAN_TYPE}, set()),
         '/tb3/odom': ({ODOMETRY_TYPE}, set()), '/tb3/tf': ({TF_TYPE}, set()),

@@ -8,13 +8,11 @@ there this file skips.
 """
 
 import os
-import time
 import unittest
 
 from ament_index_python.packages import get_package_share_directory
+from launched_graph import LaunchedGraphTestCase
 import pytest
-import rclpy
-from rclpy.executors import SingleThreadedExecutor
 from rosgraph_msgs.msg import Clock
 from service_tutorial.conversions import seconds_of
 from srv_interfaces.srv import ControlTurningMessage, GetModelList
@@ -44,29 +42,10 @@ def generate_test_description():
     return LaunchDescription([world, launch_testing.actions.ReadyToTest()])
 
 
-class TestTheLaunchedWorld(unittest.TestCase):
+class TestTheLaunchedWorld(LaunchedGraphTestCase):
     """The world as a client meets it while the launch runs."""
 
-    @classmethod
-    def setUpClass(cls):
-        # A context of its own: other tests of the session may hold rclpy's default one.
-        cls.context = rclpy.Context()
-        rclpy.init(context=cls.context)
-        cls.node = rclpy.create_node('world_launch_test', context=cls.context)
-        cls.executor = SingleThreadedExecutor(context=cls.context)
-        cls.executor.add_node(cls.node)
-
-    @classmethod
-    def tearDownClass(cls):
-        cls.executor.shutdown()
-        cls.node.destroy_node()
-        rclpy.try_shutdown(context=cls.context)
-
-    def spin_until(self, predicate, timeout):
-        deadline = time.monotonic() + timeout
-        while not predicate() and time.monotonic() < deadline:
-            self.executor.spin_once(timeout_sec=0.1)
-        return predicate()
+    node_name = 'world_launch_test'
 
     def call(self, srv_type, name, request):
         client = self.node.create_client(srv_type, name)
