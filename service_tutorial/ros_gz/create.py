@@ -31,7 +31,6 @@ from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from rclpy.task import Future
 from service_tutorial.conversions import fill_quaternion_msg
 from service_tutorial.node_main import program_arguments, run_node
-from service_tutorial.sim.frames import rpy_quaternion
 from simulation_interfaces.msg import Result
 from simulation_interfaces.srv import GetCurrentWorld, SpawnEntity
 from std_msgs.msg import String
@@ -157,10 +156,14 @@ class Create(Node):
         if not self._description.done():
             self._description.set_result(msg.data)
 
-    def call(self, executor, client, request):
-        """Call a world service once it is there, waiting as long as it takes; answer."""
+    def wait_for(self, client):
+        """Wait for a world service, as long as it takes, saying so now and then."""
         while not client.wait_for_service(timeout_sec=WAITING_PERIOD):
             self.get_logger().warning(f'waiting for the service {client.srv_name}')
+
+    def call(self, executor, client, request):
+        """Call a world service once it is there; return its answer."""
+        self.wait_for(client)
         future = client.call_async(request)
         executor.spin_until_future_complete(future)
         return future.result()
@@ -174,6 +177,10 @@ class Create(Node):
                 print(f'create: no world named {self.world_name!r}: the world here is '
                       f'{here!r}', file=sys.stderr)
                 return 1
+        # MuJoCo (for the orientation) is imported once the world is up: started beside it, as
+        # launch files start create, the import would take the cores from the world's start-up.
+        self.wait_for(self.spawn_entity_cli)
+        from service_tutorial.sim.frames import rpy_quaternion
         request = SpawnEntity.Request(name=self.entity_name, allow_renaming=self.allow_renaming)
         kind, value = self.source
         if kind == 'uri':
