@@ -117,9 +117,11 @@ class BrokenOdometryListener(OdometryListener):
 
 def test_what_a_node_of_the_test_raises_comes_out_of_step(mujoco_sim):
     mujoco_sim.add_node(BrokenOdometryListener(context=mujoco_sim.context))
-    with pytest.raises(ArithmeticError, match='odometry at 0.02 s'):
+    # The first odometry it takes is the one of 0 s or of 0.02 s: whether the world has heard
+    # of the new subscriber before its first update is the middleware's business.
+    with pytest.raises(ArithmeticError, match=r'odometry at 0\.0[02] s') as raised:
         mujoco_sim.step(10)
-    with pytest.raises(ArithmeticError, match='odometry at 0.02 s'):  # the node stopped there
+    with pytest.raises(ArithmeticError, match=str(raised.value)):  # the node stopped there
         mujoco_sim.step(10)
 
 
