@@ -35,7 +35,8 @@ BRIDGES_QOS = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
 PRESENCE_PREFIX = '/_service_tutorial/bridge_'
 PRESENCE_TOKEN = re.compile(r'[0-9a-f]{32}')
 PRESENCE_QOS = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE)
-# Wall time between two looks at the graph while a bridge's presence may still be matched, in s.
+# Wall time between two looks at the graph while a bridge's presence is listed there but not
+# yet matched, in s.
 GRAPH_LOOK_PERIOD = 0.2
 
 
@@ -92,8 +93,9 @@ class BridgeChannel:
         self._presences = {}  # bridge full name -> Presence of the process in force
         self.bridges_sub = node.create_subscription(
             String, BRIDGES_TOPIC, self.bridges_callback, BRIDGES_QOS)
-        # Runs only while a presence may still be matched (look()); on the steady wall clock,
-        # since simulation time stands still in a paused world (or one with use_sim_time).
+        # Runs only while a presence is listed on the graph but not matched yet; on the steady
+        # wall clock, since simulation time stands still in a paused world (or one with
+        # use_sim_time).
         self.graph_timer = node.create_timer(GRAPH_LOOK_PERIOD, self.graph_callback,
                                              clock=Clock(clock_type=ClockType.STEADY_TIME))
         self.graph_timer.cancel()
@@ -153,17 +155,14 @@ class BridgeChannel:
         """
         Judge a presence the middleware has not matched (yet); return whether it may come.
 
-        While the graph lists the presence publisher, or at least a node of the bridge's name
-        (whose presence the middleware may not have announced yet), the match may come. Neither
-        listed, the process has ended before it was matched.
+        A process's presence publisher is announced before its mappings, so the graph lists it
+        by the time the mappings arrive: not listed and not matched, the process has ended.
         """
         if presence.matched or presence.subscription.get_publisher_count() > 0:
             presence.matched = True
             return False
-        if self.node.count_publishers(presence_topic(presence.token)) > 0 or bridge in {
-                full_name(namespace, name)
-                for name, namespace in self.node.get_node_names_and_namespaces()}:
-            self.graph_timer.reset()
+        if self.node.count_publishers(presence_topic(presence.token)) > 0:
+            self.graph_timer.reset()  # listed: the match is on its way
             return True
         self.leave(bridge)
         return False
