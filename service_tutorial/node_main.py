@@ -12,13 +12,16 @@ import sys
 import threading
 
 import rclpy
-from rclpy.executors import ExternalShutdownException
+from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.utilities import remove_ros_args
 
 # Wall time the middleware has to let a stopping program's node go, in s. Fast DDS 2.14 can spin
 # for ever in the participant's destruction (DomainParticipant::set_listener, seen once in about
 # ten stops of a parameter_bridge here); the program then ends anyway, with its own status.
 LEAVING_TIME = 10.0
+# Wall time a spinning server waits for work before it looks whether Ctrl-C has shut rclpy down,
+# in s. rclpy's own wake-up is lost when the signal lands while the executor is being made.
+SIGNAL_LOOK_PERIOD = 0.25
 
 
 def program_arguments(args=None):
@@ -72,4 +75,14 @@ def _leave(status):
 
 def spin_node(make_node, *, args=None):
     """Make a node and spin it until Ctrl-C or shutdown; the main() of a server."""
-    return run_node(make_node, rclpy.spin, args=args, interrupted_status=None)
+    return run_node(make_node, _spin_until_shutdown, args=args, interrupted_status=None)
+
+
+def _spin_until_shutdown(node):
+    executor = SingleThreadedExecutor()
+    executor.add_node(node)
+    try:
+        while rclpy.ok():
+            executor.spin_once(timeout_sec=SIGNAL_LOOK_PERIOD)
+    finally:
+        executor.shutdown(timeout_sec=0)
