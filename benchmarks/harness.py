@@ -46,8 +46,18 @@ class ExecutorThread:
         self._executor = SingleThreadedExecutor()
         for node in nodes:
             self._executor.add_node(node)
-        self._thread = threading.Thread(target=self._executor.spin, daemon=True)
+        self._thread = threading.Thread(target=self._spin, daemon=True)
         self._thread.start()
+
+    def _spin(self):
+        from rclpy.exceptions import InvalidHandle
+        while True:
+            try:
+                return self._executor.spin()
+            except InvalidHandle:
+                # A publisher or subscription destroyed by another thread while this one made
+                # its wait set: the node no longer lists it, and the next wait set lacks it.
+                continue
 
     def stop(self):
         """Shut the executor down and wait for its thread."""
