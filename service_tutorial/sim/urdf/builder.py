@@ -27,7 +27,6 @@ from service_tutorial.sim.urdf.gazebo import read_sensor_plugin_blocks
 from service_tutorial.sim.urdf.hardened_xml import check_structure
 from service_tutorial.sim.urdf.hardened_xml import parse_model_xml
 from service_tutorial.sim.urdf.meshes import MeshLoader
-import yourdfpy
 
 WORLD_LINK = 'world'
 DEFAULT_VISUAL_RGBA = (0.7, 0.7, 0.7, 1.0)
@@ -88,6 +87,9 @@ def load_urdf(model_xml, *, base_dir=None, package_resolver=None, timestep=0.002
         # yourdfpy needs plain tags; namespaced extension elements play no part here.
         if isinstance(element.tag, str) and etree.QName(element).namespace:
             element.getparent().remove(element)
+    # yourdfpy brings trimesh and scipy, about a second of CPU: imported by the first URDF
+    # built, so that a program that only reads robot files (the lesson's clients) starts without.
+    import yourdfpy
     try:
         urdf = yourdfpy.URDF.load(
             io.BytesIO(etree.tostring(root)), build_scene_graph=False,
