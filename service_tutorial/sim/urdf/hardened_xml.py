@@ -12,6 +12,7 @@ from service_tutorial.sim.validation import quoted
 MAX_MODEL_XML_BYTES = 10 * 1024 * 1024
 JOINT_TYPES = ('fixed', 'revolute', 'continuous', 'prismatic', 'floating', 'planar')
 XACRO_NAMESPACE = 'http://www.ros.org/wiki/xacro'
+_XACRO_ELEMENTS = '{' + XACRO_NAMESPACE + '}*'  # lxml's pattern of every element in it
 
 
 def parse_model_xml(model_xml):
@@ -29,9 +30,8 @@ def parse_model_xml(model_xml):
     tag = etree.QName(root).localname
     if tag != 'robot' or etree.QName(root).namespace:
         raise UrdfError(f'model_xml is not URDF: root element is <{tag}>')
-    for element in root.iter():
-        if isinstance(element.tag, str) and etree.QName(element).namespace == XACRO_NAMESPACE:
-            raise UrdfError('model_xml contains xacro macros; run xacro on it first')
+    if next(root.iter(_XACRO_ELEMENTS), None) is not None:
+        raise UrdfError('model_xml contains xacro macros; run xacro on it first')
     return root
 
 
