@@ -250,7 +250,8 @@ class _SpecBuilder:
         anchored = False
         root_position = (0.0, 0.0, 0.0)
         root_orientation = (1.0, 0.0, 0.0, 0.0)
-        root_body = self._spec.worldbody.add_body(name=root)
+        root_body = self._spec.worldbody.add_body()
+        root_body.name = root
         if world_joints:
             world_joint = world_joints[0]
             position, orientation = _pose(world_joint.origin, f"joint '{world_joint.name}'")
@@ -274,7 +275,10 @@ class _SpecBuilder:
                 raise UrdfError(f"joints form a loop at link '{joint.child}'")
             visited.add(joint.child)
             position, orientation = _pose(joint.origin, f"joint '{joint.name}'")
-            body = parent_body.add_body(name=joint.child, pos=position, quat=orientation)
+            # Fields are set on the new element: add_body(name=..., pos=...) and the other
+            # add_*() cost MuJoCo's bindings several microseconds more per element.
+            body = parent_body.add_body()
+            body.name, body.pos, body.quat = joint.child, position, orientation
             if joint.type != 'fixed':
                 self._add_joint(body, joint)
                 joint_names.append(joint.name)
@@ -305,7 +309,8 @@ class _SpecBuilder:
             raise UrdfError(f"joint '{joint.name}' axis is zero")
         kind = (mujoco.mjtJoint.mjJNT_SLIDE if joint.type == 'prismatic'
                 else mujoco.mjtJoint.mjJNT_HINGE)
-        mj_joint = body.add_joint(name=joint.name, type=kind, axis=axis / norm)
+        mj_joint = body.add_joint()
+        mj_joint.name, mj_joint.type, mj_joint.axis = joint.name, kind, axis / norm
         if joint.type in ('revolute', 'prismatic'):
             lower, upper = float(joint.limit.lower), float(joint.limit.upper)
             if not lower < upper:
@@ -433,7 +438,8 @@ class _SpecBuilder:
             mesh_name = self.meshes.add(geometry.mesh, what, collision=collision)
             if mesh_name is None:
                 return None
-        geom = body.add_geom(pos=position, quat=orientation)
+        geom = body.add_geom()
+        geom.pos, geom.quat = position, orientation
         if geometry.box is not None:
             size = np.asarray(geometry.box.size, dtype=float)
             check_size(size, 3, f'{what} box size', across=(1.0, 1.0, 1.0))
