@@ -167,13 +167,14 @@ def check_size(size, count, what, across):
     size: the shape's count numbers; across: what each number is multiplied by to give an
     extent (a radius by 2).
     """
-    # ndarray methods, not np.all() and the like: numpy's dispatch of those cost more than
-    # the checks of these few numbers, done for every shape of every spawn.
-    if size.shape != (count,) or not np.isfinite(size).all() or (size <= 0.0).any():
-        raise UrdfError(f'{what} must be {count} positive numbers: {size.tolist()}')
-    extent = float((size * np.asarray(across)).max())
+    # Python floats, not numpy's calls: those cost more than the checks of these few
+    # numbers, done for every shape of every spawn.
+    values = size.tolist()
+    if size.shape != (count,) or not all(0.0 < value < math.inf for value in values):
+        raise UrdfError(f'{what} must be {count} positive numbers: {values}')
+    extent = max(value * factor for value, factor in zip(values, across))
     if extent > MAX_SIZE:
-        raise UrdfError(f'{what} {size.tolist()}: the shape is {extent:g} m across, more '
+        raise UrdfError(f'{what} {values}: the shape is {extent:g} m across, more '
                         f'than the limit of {MAX_SIZE:g} m')
 
 
