@@ -472,7 +472,9 @@ class _SpecBuilder:
                 color = self._materials[material.name].color
         if color is None:
             return DEFAULT_VISUAL_RGBA
-        rgba = np.asarray(color.rgba, dtype=float)
-        if rgba.shape != (4,) or not np.isfinite(rgba).all():
+        # Four Python floats, clipped as np.clip does (-0.0 stays): numpy's calls cost more
+        # than these checks, made for every visual.
+        rgba = color.rgba.tolist()
+        if len(rgba) != 4 or not all(math.isfinite(value) for value in rgba):
             raise UrdfError(f"link '{link_name}' material colour must be four finite numbers")
-        return np.clip(rgba, 0.0, 1.0)
+        return [min(max(value, 0.0), 1.0) for value in rgba]
