@@ -14,6 +14,7 @@ name gz topics and frames, read gz's parameters and what gz's sensors share.
 """
 
 from dataclasses import dataclass
+import functools
 import importlib
 import math
 import re
@@ -79,8 +80,14 @@ def kind_of(filename):
 def plugin_class(kind):
     """Return the Plugin subclass that stands in for a registered Gazebo plugin kind."""
     if kind.startswith(GZ_SENSOR):
-        return importlib.import_module(GZ_SENSORS[kind[len(GZ_SENSOR):]]).PLUGIN
-    return importlib.import_module(KINDS[kind]).PLUGIN
+        return _module_plugin(GZ_SENSORS[kind[len(GZ_SENSOR):]])
+    return _module_plugin(KINDS[kind])
+
+
+@functools.cache
+def _module_plugin(module):
+    """Return a plugin module's PLUGIN; asked for by every spawn, looked up once."""
+    return importlib.import_module(module).PLUGIN
 
 
 def configure_plugins(blocks, robot):
