@@ -116,9 +116,10 @@ class Model:
         else:
             position, orientation = np.array(self.frame.pos), np.array(self.frame.quat)
         # Named by the prefix alone, which no element of the model's can be: moved_into()
-        # finds it by name.
-        self.frame = spec.worldbody.add_frame(pos=position, quat=orientation,
-                                              name=self.scoped(''))
+        # finds it by name. Its fields are set on it: add_frame(pos=..., ...) costs MuJoCo's
+        # bindings several times as much.
+        self.frame = spec.worldbody.add_frame()
+        self.frame.pos, self.frame.quat, self.frame.name = position, orientation, self.scoped('')
         self.group = None
         # The world's spec copies what it attaches (copy_during_attach), so the description,
         # shared by every model spawned from the same URDF, stays as it was loaded.
