@@ -219,22 +219,7 @@ def sensor_block(element, link, pose=None):
     """
     name = (element.get('name') or '').strip()
     values = {}
-    for child in element.iter():
-        if child is element or not isinstance(child.tag, str):
-            continue
-        tags = []
-        ancestor = child
-        while ancestor is not element:
-            tags.append(ancestor.tag)
-            ancestor = ancestor.getparent()
-        if 'plugin' in tags:
-            continue
-        path = '/'.join(reversed(tags))
-        # SDF writes some settings either way: <noise type="gaussian"> or <noise><type>.
-        for attribute, text in child.attrib.items():
-            values.setdefault(f'{path}/{attribute}', text.strip())
-        if not len(child):
-            values[path] = (child.text or '').strip()
+    _read_values(element, '', values)
     if pose is None:
         pose_text = values.get('pose', '0 0 0 0 0 0')
         numbers = parse_numbers(pose_text, f'sensor {quoted(name)} <pose>')
@@ -251,6 +236,26 @@ def sensor_block(element, link, pose=None):
         position=tuple(float(value) for value in pose[0]),
         orientation=tuple(float(value) for value in pose[1]),
         values=types.MappingProxyType(values))
+
+
+def _read_values(parent, path, values):
+    """
+    Add the texts below parent to values by their path of tags, in document order.
+
+    path: parent's own path below the <sensor>, with a trailing '/' ('' for the <sensor>);
+    a <plugin> and what it holds are left out.
+    """
+    for child in parent:
+        tag = child.tag
+        if not isinstance(tag, str) or tag == 'plugin':
+            continue
+        # SDF writes some settings either way: <noise type="gaussian"> or <noise><type>.
+        for attribute, text in child.attrib.items():
+            values.setdefault(f'{path}{tag}/{attribute}', text.strip())
+        if len(child):
+            _read_values(child, f'{path}{tag}/', values)
+        else:
+            values[path + tag] = (child.text or '').strip()
 
 
 def plugin_filenames(root):
