@@ -72,8 +72,9 @@ class AssetError(DescriptionError):
 def quoted(text):
     """Return user text in quotes for a message: control characters escaped, long text cut."""
     shown = text[:MAX_QUOTED_LENGTH]
-    shown = ''.join(character if character.isprintable() else repr(character)[1:-1]
-                    for character in shown)
+    if not shown.isprintable():  # one C call for the usual text, not a step per character
+        shown = ''.join(character if character.isprintable() else repr(character)[1:-1]
+                        for character in shown)
     if len(text) > MAX_QUOTED_LENGTH:
         return f"'{shown}...' ({len(text)} characters)"
     return f"'{shown}'"
