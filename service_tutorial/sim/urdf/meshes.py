@@ -9,6 +9,7 @@ and MuJoCo gets plain vertices and faces. A mesh that cannot be had (unknown pac
 or unreadable file, relative path without a base directory) is left out, as Gazebo does.
 """
 
+import functools
 import io
 import os
 import warnings
@@ -36,12 +37,17 @@ class MeshLoader:
     def __init__(self, spec, base_dir, package_resolver):
         """Load into spec; relative paths resolve below base_dir, package:// by the resolver."""
         self._spec = spec
-        self._base_dir = os.path.realpath(base_dir) if base_dir else None
+        self._given_base_dir = base_dir
         self._package_resolver = package_resolver
         self._decoded = {}  # real path -> (vertices, faces), so a file is read once
         self.files = []  # the real path of every mesh added, one per geometry
         self.missing = []  # (filename as written, why it cannot be had), one per geometry
         self.left_out = []  # notes on the meshes that were had but could not be used
+
+    @functools.cached_property
+    def _base_dir(self):
+        """Return the real path of the base directory; looked up at the first mesh, if any."""
+        return os.path.realpath(self._given_base_dir) if self._given_base_dir else None
 
     def add(self, mesh, what, *, collision=False):
         """
