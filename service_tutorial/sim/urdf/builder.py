@@ -221,6 +221,7 @@ class _SpecBuilder:
         # per group root, the group its parent link belongs to: MuJoCo's welds.
         self._weld = {}
         self._weld_parent = {}
+        self._principal_inertias = {}  # (orientation, tensor bytes) -> principal_inertia()
 
     def build(self):
         """Return the finished spec and what a world needs to know about it."""
@@ -428,7 +429,11 @@ class _SpecBuilder:
                             dtype=float)
         if not _finite(tensor):
             raise UrdfError(f"link '{link.name}' inertia contains NaN or infinity")
-        moments, principal = frames.principal_inertia(orientation, tensor)
+        # Robots repeat their wheels and legs: each inertia is diagonalised once per robot.
+        key = (orientation.tobytes(), tensor.tobytes())
+        if key not in self._principal_inertias:
+            self._principal_inertias[key] = frames.principal_inertia(orientation, tensor)
+        moments, principal = self._principal_inertias[key]
         if moments[0] <= 0.0:
             raise UrdfError(f"link '{link.name}' inertia is not positive definite "
                             f'(principal moments {moments.tolist()})')
