@@ -29,11 +29,12 @@ class UrdfError(ValueError):
 
 def parse_numbers(text, what):
     """Return the numbers of a whitespace- or comma-separated text; refuse NaN and infinity."""
+    # map(), not a comprehension or generator: this reads every number of every robot.
     try:
-        values = [float(token) for token in text.replace(',', ' ').split()]
+        values = list(map(float, text.replace(',', ' ').split()))
     except ValueError:
         raise UrdfError(f'{what} is not a number: {quoted(text)}') from None
-    if not all(math.isfinite(value) for value in values):
+    if not all(map(math.isfinite, values)):
         raise UrdfError(f'{what} contains NaN or infinity: {quoted(text)}')
     return values
 
