@@ -111,11 +111,12 @@ _NUMERIC_ATTRIBUTES = {
 def check_numbers(element, what):
     """Refuse numeric attributes below element that do not hold the numbers they should."""
     for child in element.iter(*_NUMERIC_ATTRIBUTES):
-        for key, counts in _NUMERIC_ATTRIBUTES[child.tag].items():
+        tag = child.tag  # lxml makes a new string at each reading
+        for key, counts in _NUMERIC_ATTRIBUTES[tag].items():
             text = child.get(key)
             if text is None:
                 continue
-            where = f'{what} <{child.tag} {key}>'
+            where = f'{what} <{tag} {key}>'
             values = parse_numbers(text, where)
             if len(values) not in counts:
                 expected = ' or '.join(str(count) for count in counts)
