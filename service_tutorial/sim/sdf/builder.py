@@ -215,7 +215,10 @@ class _SpecBuilder:
         # The root body stands at the spawn pose; its pose in the model frame is root_position.
         pose = IDENTITY if parent_link is None else relative(self._links[parent_link].pose,
                                                              link.pose)
-        body = parent_body.add_body(name=name, pos=pose[0], quat=pose[1])
+        # Fields are set on each new element: add_body(name=..., pos=...) and the other
+        # add_*() cost MuJoCo's bindings several microseconds more per element.
+        body = parent_body.add_body()
+        body.name, body.pos, body.quat = name, pose[0], pose[1]
         self._set_inertia(body, link)
         if not link.gravity:
             body.gravcomp = 1.0  # MuJoCo's gravity compensation holds the body's weight
@@ -287,22 +290,27 @@ class _SpecBuilder:
             geom_fields['size'] = [shape.size[0] / 2.0, shape.size[1] / 2.0, 0.05]
         else:
             geom_fields['size'] = _mujoco_size(shape.kind, shape.size)
-        return body.add_geom(**geom_fields)
+        geom = body.add_geom()
+        for field, value in geom_fields.items():
+            setattr(geom, field, value)
+        return geom
 
     def _add_joint(self, body, joint):
         """Add a joint's MuJoCo joints to its child's body, in the child's frame."""
         child_pose = self._links[joint.child].pose
         position = relative(child_pose, joint.pose)[0]
         if joint.kind == 'ball':
-            body.add_joint(name=joint.name, type=mujoco.mjtJoint.mjJNT_BALL, pos=position)
+            ball = body.add_joint()
+            ball.name, ball.type, ball.pos = joint.name, mujoco.mjtJoint.mjJNT_BALL, position
             self._joint_names.append(joint.name)
             return
         kind = mujoco.mjtJoint.mjJNT_SLIDE if joint.kind == 'prismatic' else \
             mujoco.mjtJoint.mjJNT_HINGE
         for index, axis in enumerate(joint.axes):
             name = joint.name if index == 0 else f'{joint.name}_axis2'
-            mj_joint = body.add_joint(name=name, type=kind, pos=position,
-                                      axis=frames.rotate_back(child_pose[1], axis.xyz))
+            mj_joint = body.add_joint()
+            mj_joint.name, mj_joint.type, mj_joint.pos = name, kind, position
+            mj_joint.axis = frames.rotate_back(child_pose[1], axis.xyz)
             bounded = abs(axis.lower) < NO_LIMIT and abs(axis.upper) < NO_LIMIT
             if joint.kind != 'continuous' and bounded:
                 if not axis.lower < axis.upper:
