@@ -83,10 +83,9 @@ def load_urdf(model_xml, *, base_dir=None, package_resolver=None, timestep=0.002
     """
     root = parse_model_xml(model_xml)
     check_structure(root)
-    for element in list(root.iter()):
-        # yourdfpy needs plain tags; namespaced extension elements play no part here.
-        if isinstance(element.tag, str) and etree.QName(element).namespace:
-            element.getparent().remove(element)
+    # yourdfpy needs plain tags; namespaced extension elements play no part here.
+    for element in [element for element in root.iter('*') if element.tag[0] == '{']:
+        element.getparent().remove(element)
     # yourdfpy brings trimesh and scipy, about a second of CPU: imported by the first URDF
     # built, so that a program that only reads robot files (the lesson's clients) starts without.
     import yourdfpy
