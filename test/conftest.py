@@ -27,6 +27,17 @@ def pytest_configure(config):
     config.addinivalue_line('markers', 'pep257: docstring style check')
     config.addinivalue_line('markers', 'linter: static check, not behaviour')
     config.addinivalue_line('markers', 'ros: needs rclpy and the built srv_interfaces')
+    config.addinivalue_line('markers', 'long: takes tens of seconds; collected first')
+
+
+def pytest_collection_modifyitems(items):
+    """
+    Put the long tests first, in their order, the others after them in theirs.
+
+    The workers of pytest -n take the tests in this order: each long one starts at once on a
+    worker of its own while the short ones fill the others, and the workers end together.
+    """
+    items.sort(key=lambda item: item.get_closest_marker('long') is None)
 
 
 @pytest.fixture(scope='session')

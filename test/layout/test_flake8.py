@@ -11,6 +11,7 @@ PATHS = [os.path.join(ROOT, name) for name in ('service_tutorial', 'test', 'laun
 
 @pytest.mark.flake8
 @pytest.mark.linter
+@pytest.mark.long
 def test_flake8():
     rc, errors = main_with_errors(argv=PATHS)
     assert rc == 0, f'Found {len(errors)} code style errors / warnings:\n' + '\n'.join(errors)

@@ -44,6 +44,7 @@ def test_spawn_model_wants_exactly_one_model_description():
 
 
 @pytest.mark.ros
+@pytest.mark.long
 def test_lesson_programs_spawn_delete_and_reset(ros):
     world = ros.start_world(paused=True)
 

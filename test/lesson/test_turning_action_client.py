@@ -90,6 +90,7 @@ def test_ctrl_c_cancels_the_goal_and_tinybot_stops(action_world, start_program):
     assert reported == pytest.approx(turned, abs=0.02)
 
 
+@pytest.mark.long
 def test_a_reader_that_goes_away_ends_the_client_quietly(action_world, start_program):
     client = start_program([CLIENT, '2.0', '0.5'])
     for line in client.stdout:

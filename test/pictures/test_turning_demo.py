@@ -28,6 +28,7 @@ def assert_gone(pids):
             os.kill(pid, 0)
 
 
+@pytest.mark.long
 def test_demo_walks_the_lesson_and_measures_the_turn(tmp_path):
     finished = run_demo(log_dir=tmp_path)
 
@@ -60,6 +61,7 @@ def test_demo_walks_the_lesson_and_measures_the_turn(tmp_path):
     assert_gone(child_pids(output))
 
 
+@pytest.mark.long
 def test_a_failing_step_stops_the_demo_with_a_clear_message(tmp_path):
     finished = run_demo('--velocity', '2.0', log_dir=tmp_path)
 
@@ -70,6 +72,7 @@ def test_a_failing_step_stops_the_demo_with_a_clear_message(tmp_path):
     assert_gone(child_pids(finished.stdout))
 
 
+@pytest.mark.long
 def test_ctrl_c_mid_demo_stops_the_children(tmp_path, start_program):
     demo = start_program([program_path('turning_demo'), '--log-dir', str(tmp_path)],
                          stderr=subprocess.STDOUT)
@@ -88,6 +91,7 @@ def test_ctrl_c_mid_demo_stops_the_children(tmp_path, start_program):
     assert_gone(child_pids(''.join(seen)))
 
 
+@pytest.mark.long
 def test_web_prints_the_page_address_serves_it_and_ctrl_c_ends_it_cleanly(tmp_path,
                                                                           start_program):
     with socket.socket() as probe:

@@ -322,6 +322,7 @@ TWO_WORKERS = textwrap.dedent('''\
 ''')
 
 
+@pytest.mark.long
 def test_under_pytest_xdist_each_worker_has_worlds_of_its_own_on_its_own_domain(tmp_path):
     user_folder = tmp_path / 'user'
     meeting = user_folder / 'meeting'

@@ -117,6 +117,7 @@ def web_world(class_ros):
     web.browser.close()
 
 
+@pytest.mark.long
 class TestWebPage:
     """In order: pixels, spawns through the service and the page, turns, drives, bad input."""
 
@@ -142,8 +143,9 @@ class TestWebPage:
         spawned = web_world.world.spawn('r2d2', web_world.r2d2, lesson_pose())
         answered = time.monotonic()
         assert spawned.success, spawned.status_message
+        # An event, not a time limit: how soon it comes is the benchmark's web section's.
         assert web_world.ros.wait_for(lambda: web_world.page.scene.redraws > redraws,
-                                      timeout=0.5), 'the page did not draw R2-D2 within 0.5 s'
+                                      timeout=10.0), 'the page did not draw R2-D2'
         drawn = time.monotonic() - answered
         time.sleep(1.5)  # R2-D2 falls from 1 m and lands
         with_r2d2 = web_world.view_until(

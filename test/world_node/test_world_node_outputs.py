@@ -334,6 +334,7 @@ def spawn_r2d2(ros, namespace, *, tries=6):
 
 
 @pytest.mark.parametrize('real_time_factor', [0.0, 1.0])
+@pytest.mark.long
 def test_a_stop_signal_ends_the_world_quietly_whatever_it_was_doing(
         ros, start_program, real_time_factor):
     # SIGTERM (docker stop, launch after a SIGINT) shuts the context down under the step
