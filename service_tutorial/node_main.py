@@ -7,6 +7,7 @@ node is destroyed and rclpy shut down. Errors a program expects are printed as
 '<program>: <error>' on stderr and give exit status 1.
 """
 
+import faulthandler
 import os
 import sys
 import threading
@@ -19,6 +20,9 @@ from rclpy.utilities import remove_ros_args
 # for ever in the participant's destruction (DomainParticipant::set_listener, seen once in about
 # ten stops of a parameter_bridge here); the program then ends anyway, with its own status.
 LEAVING_TIME = 10.0
+# A hang that holds the GIL stops that timer too; faulthandler's watchdog, a thread that needs
+# no GIL, then prints where each thread is and ends the program (status 1) this much later, in s.
+WATCHDOG_GRACE = 5.0
 # Wall time a spinning server waits for work before it looks whether Ctrl-C has shut rclpy down,
 # in s. rclpy's own wake-up is lost when the signal lands while the executor is being made.
 SIGNAL_LOOK_PERIOD = 0.25
@@ -57,9 +61,11 @@ def run_node(make_node, work, *, args=None, program='', errors=(), interrupted_s
         leave_anyway = threading.Timer(LEAVING_TIME, _leave, (status,))
         leave_anyway.daemon = True
         leave_anyway.start()
+        faulthandler.dump_traceback_later(LEAVING_TIME + WATCHDOG_GRACE, exit=True)
         if node is not None:
             node.destroy_node()
         rclpy.try_shutdown()
+        faulthandler.cancel_dump_traceback_later()
         leave_anyway.cancel()
     return status
 
