@@ -64,7 +64,7 @@ def generate_test_description():
                   parameters=[{'config_file': os.path.abspath(BRIDGE_FILE)}])
     return LaunchDescription([world, create, create_wall, bridge,
                               launch_testing.actions.ReadyToTest()]), {
-        'world': world, 'create': create, 'bridge': bridge}
+        'world': world, 'create': create, 'create_wall': create_wall, 'bridge': bridge}
 
 
 class TestTheGazeboStyleLaunch(LaunchedGraphTestCase):
@@ -72,11 +72,14 @@ class TestTheGazeboStyleLaunch(LaunchedGraphTestCase):
 
     node_name = 'gz_launch_test'
 
-    def test_create_spawns_the_robot_and_ends_with_status_0(self, proc_info, proc_output, create):
+    def test_create_spawns_the_robot_and_ends_with_status_0(
+            self, proc_info, proc_output, create, create_wall):
         proc_output.assertWaitFor("spawned 'burger'", process=create,
                                   timeout=START_UP_TIMEOUT)
-        proc_info.assertWaitForShutdown(process=create, timeout=START_UP_TIMEOUT)
-        launch_testing.asserts.assertExitCodes(proc_info, process=create)
+        # Both creates end on their own, before the launch's end could interrupt the wall's.
+        for program in (create, create_wall):
+            proc_info.assertWaitForShutdown(process=program, timeout=START_UP_TIMEOUT)
+            launch_testing.asserts.assertExitCodes(proc_info, process=program)
 
     def test_the_world_applies_the_bridges_mappings(self, proc_output, world):
         proc_output.assertWaitFor('bridge /ros_gz_bridge: 6 mapping(s) applied', process=world,
