@@ -207,7 +207,6 @@ class MujocoWorld(Node):
 
         # Free-running stepping uses a zero-period timer: it fires on every executor turn,
         # and the executor serves pending service calls between two turns.
-        self.pacer.anchor(self.world.time)
         # The world is the source of /clock, so it paces itself on the steady wall clock even
         # when use_sim_time is set (a sim-time timer would wait for its own /clock forever).
         self.step_timer = self.create_timer(

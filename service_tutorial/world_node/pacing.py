@@ -78,6 +78,8 @@ WALL_SLACK = 0.1
 # What a step costs is learnt from the chunks of steps: each sum keeps this much of the last.
 COST_MEMORY = 0.8
 # Further behind real time than this (s), the machine cannot keep up: do not try to catch up.
+# A longer stall loses simulated time: the commands of nodes on simulation time would
+# otherwise come late by as much as the world raced to make it up.
 MAX_LAG = 0.1
 # The longest rest after a tick that ran past its budget, in s of wall time.
 MAX_REST = 0.2
@@ -130,7 +132,9 @@ class Pacer:
         self._turn_owed = False  # the executor's next turn goes to the calls waiting
         self._back_to_back = False  # the last tick was followed at once by the next
         self._tick_ended = 0.0  # wall time
-        self._wall_anchor = wall_clock()
+        # Simulation time is tied to the wall clock at the first tick in real time, not when
+        # the world is made: the time it takes the node to start spinning is not made up.
+        self._wall_anchor = None
         self._sim_anchor = 0.0
         self._next_repeat = 0.0
 
@@ -172,7 +176,8 @@ class Pacer:
         so that a client's next call finds the executor free: calls back to back put stepping
         off by MAX_DEFERRAL at most.
         """
-        self._wall_anchor += max(0.0, self._wall_clock() - busy_since)
+        if self._wall_anchor is not None:
+            self._wall_anchor += max(0.0, self._wall_clock() - busy_since)
         return busy_since - self._tick_started < MAX_DEFERRAL
 
     def set_real_time_factor(self, real_time_factor, sim_time):
@@ -262,6 +267,8 @@ class Pacer:
             yield from self._real_time_chunks(sim_time, other_due)
 
     def _real_time_chunks(self, sim_time, other_due):
+        if self._wall_anchor is None:
+            self.anchor(sim_time())
         wall = self._wall_clock()
         target = self._sim_anchor + (wall - self._wall_anchor) * self.real_time_factor
         behind = int((target - sim_time()) / self.timestep)

@@ -103,6 +103,19 @@ def test_real_time_factor_two_runs_twice_as_fast():
     assert world.steps == 100
 
 
+def test_real_time_counts_from_the_first_tick_not_from_when_the_pacer_was_made():
+    wall = FakeClock()
+    pacer = Pacer(timestep=TIMESTEP, real_time_factor=1.0, periods={}, wall_clock=wall,
+                  cpu_clock=FakeClock())
+    world = FakeWorld(pacer, wall, 0.0, 0.0)
+    wall.now += 0.2  # the node took this long to start spinning
+    world.tick()
+    assert world.steps == 0
+    wall.now += 0.01
+    world.tick()
+    assert world.steps == 5
+
+
 def test_real_time_does_not_catch_up_more_than_a_tenth_of_a_second():
     pacer, world, wall, _ = make(1.0)
     wall.now += 0.5  # the machine stalled
