@@ -86,10 +86,9 @@ def test_tf_carries_odom_to_base_exactly_as_odom_says(ros):
     odometry = ros.subscribe(Odometry, '/odom', depth=1000)
     transforms = ros.subscribe(TFMessage, '/tf', depth=1000)
     assert ros.wait_for(lambda: odometry and transforms), 'no odom or no /tf'
-    publisher = ros.client_node.create_publisher(Twist, '/cmd_vel', 10)
     twist = Twist()
     twist.linear.x, twist.angular.z = 0.3, 0.8  # an arc: x, y and yaw all change
-    publisher.publish(twist)
+    world.command('/cmd_vel', twist)  # once the world has taken it
     world.wait_sim(1.0)
 
     by_stamp = {}
