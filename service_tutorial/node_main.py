@@ -1,14 +1,17 @@
 """
 The main() of every executable here: rclpy up, one node, its work, and a clean shutdown.
 
-rclpy.init() comes first, then the node is made and does its work; Ctrl-C (KeyboardInterrupt)
-and a shutdown from outside (ExternalShutdownException) end it quietly, and in every case the
-node is destroyed and rclpy shut down. Errors a program expects are printed as
+rclpy.init() comes first, then the node is made and does its work; Ctrl-C (KeyboardInterrupt,
+or for a server spinning, a flag it looks at) and a shutdown from outside
+(ExternalShutdownException) end it quietly, and in every case the node is destroyed and rclpy
+shut down. Errors a program expects are printed as
 '<program>: <error>' on stderr and give exit status 1.
 """
 
+import contextlib
 import faulthandler
 import os
+import signal
 import sys
 import threading
 
@@ -23,8 +26,8 @@ LEAVING_TIME = 10.0
 # A hang that holds the GIL stops that timer too; faulthandler's watchdog, a thread that needs
 # no GIL, then prints where each thread is and ends the program (status 1) this much later, in s.
 WATCHDOG_GRACE = 5.0
-# Wall time a spinning server waits for work before it looks whether Ctrl-C has shut rclpy down,
-# in s. rclpy's own wake-up is lost when the signal lands while the executor is being made.
+# Wall time a spinning server waits for work before it looks again whether to stop, in s: a
+# Ctrl-C that lands while the executor is being made wakes nothing.
 SIGNAL_LOOK_PERIOD = 0.25
 
 
@@ -79,16 +82,48 @@ def _leave(status):
     os._exit(status or 0)
 
 
-def spin_node(make_node, *, args=None):
-    """Make a node and spin it until Ctrl-C or shutdown; the main() of a server."""
-    return run_node(make_node, _spin_until_shutdown, args=args, interrupted_status=None)
+def spin_node(make_node, *, args=None, done=None):
+    """
+    Make a node and spin it until Ctrl-C or shutdown; the main() of a server.
+
+    done: a function of the node that returns a Future; the server also ends when it is done.
+    """
+    interrupted = threading.Event()
+    with _interrupt_sets(interrupted):
+        return run_node(make_node, lambda node: _spin(node, interrupted, done), args=args,
+                        interrupted_status=None)
 
 
-def _spin_until_shutdown(node):
+@contextlib.contextmanager
+def _interrupt_sets(event):
+    """
+    Let Ctrl-C set event, rather than raise KeyboardInterrupt, within the block.
+
+    rclpy's SIGINT handler wakes the executors and passes the signal on to Python's, which
+    raises KeyboardInterrupt at whatever the main thread runs next. Raised in a __del__ or in a
+    callback called from C, it is printed and dropped, and the server spun on for ever (seen
+    under load); raised once the spinning had ended, it escaped the teardown (exit status 1).
+    Set before rclpy.init, which keeps the handler it finds to pass signals on to. Only the
+    main thread may set a handler: elsewhere (a test that runs main()) nothing changes.
+    """
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    previous = signal.signal(signal.SIGINT, lambda signum, frame: event.set())
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)
+
+
+def _spin(node, interrupted, done):
     executor = SingleThreadedExecutor()
     executor.add_node(node)
+    finished = None if done is None else done(node)
+    if finished is not None:
+        finished.add_done_callback(lambda _: executor.wake())
     try:
-        while rclpy.ok():
+        while rclpy.ok() and not interrupted.is_set() and not (finished and finished.done()):
             executor.spin_once(timeout_sec=SIGNAL_LOOK_PERIOD)
     finally:
         executor.shutdown(timeout_sec=0)

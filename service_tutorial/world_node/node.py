@@ -21,7 +21,6 @@ effect as soon as it is set. What the simulation logs reaches the node's logger 
 
 import time
 
-import rclpy
 from rclpy.clock import Clock as WallClock, ClockType
 from rclpy.event_handler import PublisherEventCallbacks
 from rclpy.node import Node
@@ -29,7 +28,7 @@ from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from rclpy.task import Future
 from rosgraph_msgs.msg import Clock
 from service_tutorial.conversions import fill_time_msg
-from service_tutorial.node_main import run_node
+from service_tutorial.node_main import spin_node
 from service_tutorial.sim.recovery import Removal
 from service_tutorial.sim.validation import quoted
 from service_tutorial.sim.validation import WorldError
@@ -456,9 +455,8 @@ def main(args=None, *, web_panel=None):
 
     A bad parameter ends it with one line, status 2. web_panel: as MujocoWorld's.
     """
-    return run_node(lambda: run_or_exit('mujoco_world', MujocoWorld, web_panel=web_panel),
-                    lambda world: rclpy.spin_until_future_complete(world, world.quitting),
-                    args=args, interrupted_status=None)
+    return spin_node(lambda: run_or_exit('mujoco_world', MujocoWorld, web_panel=web_panel),
+                     args=args, done=lambda world: world.quitting)
 
 
 if __name__ == '__main__':

@@ -1,11 +1,13 @@
 """
-A program whose middleware hangs as it lets the node go still ends, with its own status.
+A program stops on Ctrl-C, and ends with its own status even when its middleware hangs.
 
 Fast DDS 2.14 can spin for ever destroying a participant; a parameter_bridge that never ends
 would keep its mappings in the world and a launch file from finishing. node_main's programs
-give the middleware LEAVING_TIME, then end anyway.
+give the middleware LEAVING_TIME, then end anyway. A server's Ctrl-C is a flag it looks at,
+not a KeyboardInterrupt that code in its way may drop.
 """
 
+import signal
 import subprocess
 import sys
 import textwrap
@@ -43,3 +45,48 @@ def test_a_program_stuck_leaving_ends_after_the_leaving_time_with_status_0():
     assert done.returncode == 0, done.stderr
     assert (f'the middleware did not let the node go within {LEAVING_TIME:g} s; ending anyway'
             in done.stderr)
+
+
+# A server that takes a while to let its node go, and says when it starts and ends.
+SLOW_TO_LEAVE_SERVER = textwrap.dedent("""
+    import sys
+    import time
+
+    from rclpy.node import Node
+    from service_tutorial.node_main import spin_node
+
+
+    class SlowToLeave(Node):
+        def __init__(self):
+            super().__init__('slow_to_leave')
+            self.timer = self.create_timer(0.01, self.say_spinning)
+
+        def say_spinning(self):
+            print('spinning', flush=True)
+            self.timer.cancel()
+
+        def destroy_node(self):
+            print('leaving', flush=True)
+            time.sleep(1.0)
+            super().destroy_node()
+            print('left', flush=True)
+
+
+    sys.exit(spin_node(SlowToLeave, args=['slow_to_leave']))
+""")
+
+
+def test_a_second_ctrl_c_while_a_server_leaves_lets_it_finish_leaving():
+    server = subprocess.Popen([sys.executable, '-c', SLOW_TO_LEAVE_SERVER],
+                              stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        assert server.stdout.readline() == 'spinning\n'
+        server.send_signal(signal.SIGINT)
+        assert server.stdout.readline() == 'leaving\n'
+        server.send_signal(signal.SIGINT)  # an impatient user
+        out, err = server.communicate(timeout=LEAVING_TIME)
+    finally:
+        server.kill()
+        server.communicate()
+    assert out == 'left\n' and server.returncode == 0, err
+    assert 'Traceback' not in err, err
