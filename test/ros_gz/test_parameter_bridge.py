@@ -111,8 +111,10 @@ class Bridge:
 
     def __init__(self, world, program, *args):
         """Start program with args on world's graph."""
+        # faulthandler on: a SIGABRT prints where each of its threads is.
         environment = dict(os.environ, ROS_DOMAIN_ID=str(world.domain_id),
-                           ROS_AUTOMATIC_DISCOVERY_RANGE='LOCALHOST')
+                           ROS_AUTOMATIC_DISCOVERY_RANGE='LOCALHOST', PYTHONFAULTHANDLER='1')
+        self.program = program
         self.process = subprocess.Popen([program_path(program), *args], env=environment,
                                         stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                                         text=True)
@@ -120,7 +122,13 @@ class Bridge:
     def stop(self):
         """Interrupt it (Ctrl-C, as launch does); return (exit status, what it logged)."""
         self.process.send_signal(signal.SIGINT)
-        out, err = self.process.communicate(timeout=EVENT_TIMEOUT)
+        try:
+            out, err = self.process.communicate(timeout=EVENT_TIMEOUT)
+        except subprocess.TimeoutExpired:
+            self.process.send_signal(signal.SIGABRT)
+            out, err = self.process.communicate()
+            pytest.fail(f'{self.program} did not end within {EVENT_TIMEOUT:g} s of Ctrl-C; '
+                        f'what it logged, and where its threads were:\n{out}{err}')
         return self.process.returncode, out + err
 
 
@@ -148,7 +156,7 @@ def test_a_yaml_file_maps_the_topics_while_the_bridge_runs_and_the_defaults_come
     status, logged = bridge.stop()
     assert wait_served(world, (CMD_VEL, Twist), CMD_VEL, 'gz.msgs.Twist', ROS_TO_GZ)
     assert served(world, SCAN, 'gz.msgs.LaserScan', GZ_TO_ROS) == (SCAN, LaserScan)
-    assert status == 0
+    assert status == 0, logged
     # The entry ros_gz_bridge would refuse is named with its file; the others applied.
     assert (f'bridge configuration {config}, entry 4 (camera): sensor_msgs/msg/Image and '
             'gz.msgs.Twist do not go together') in logged
