@@ -14,6 +14,10 @@ import time
 import pytest
 from service_tutorial.testing.isolation import isolate_ros_graph
 
+# Wall time an awaited event or call may take before the test fails, in s: a net for a hang, not
+# a speed limit (SimulatedWorld's CALL_TIMEOUT; this module stays free of ROS imports).
+EVENT_TIMEOUT = 30.0
+
 # Before rclpy (and any node a test starts) reads the environment.
 isolate_ros_graph()
 # Messages check the types of the values written into them: an int in a float64 field would
@@ -83,7 +87,7 @@ class RosHarness:
         self._spinning.append((node, executor, thread))
         return node
 
-    def settle(self, timeout=10.0):
+    def settle(self, timeout=EVENT_TIMEOUT):
         """Wait until the settling nodes have run every callback ready, and what followed."""
         from service_tutorial.testing.settling_executor import SettlingExecutor
         for node, executor, _ in self._spinning:
@@ -106,7 +110,7 @@ class RosHarness:
         destroy = {Subscription: node.destroy_subscription, Publisher: node.destroy_publisher,
                    Client: node.destroy_client}[type(entity)]
         task = executor.create_task(destroy, entity)
-        assert self.wait_for(task.done, timeout=10.0), 'the client node did not destroy it'
+        assert self.wait_for(task.done), 'the client node did not destroy it'
         task.result()
 
     def action_client(self, action_type, action_name):
@@ -116,7 +120,7 @@ class RosHarness:
         self._action_clients.append(client)
         return client
 
-    def call(self, srv_type, service_name, request, *, timeout=10.0):
+    def call(self, srv_type, service_name, request, *, timeout=EVENT_TIMEOUT):
         """Call a service from the client node and return its response or fail the test."""
         client = self.client_node.create_client(srv_type, service_name)
         try:
@@ -169,7 +173,7 @@ class RosHarness:
         return RunningWorld(self, **parameters)
 
     @staticmethod
-    def wait_for(predicate, *, timeout=10.0, period=0.002):
+    def wait_for(predicate, *, timeout=EVENT_TIMEOUT, period=0.002):
         """Wait until predicate() is true; return whether it became true in time."""
         deadline = time.monotonic() + timeout
         while time.monotonic() < deadline:

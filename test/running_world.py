@@ -17,6 +17,7 @@ from rosgraph_msgs.msg import Clock
 from service_tutorial.conversions import seconds_of
 from service_tutorial.lesson.r2d2 import spawn_pose
 from service_tutorial.lesson_world import lesson_world
+from service_tutorial.testing.simulated_world import CALL_TIMEOUT
 from service_tutorial.world_node.subscribers import SUBSCRIBER_CHECK_PERIOD
 from simulation_interfaces.msg import Result
 from simulation_interfaces.srv import StepSimulation
@@ -58,7 +59,7 @@ class RunningWorld:
         ros.client_node.create_subscription(
             Clock, '/clock', lambda msg: self.clock.append((time.monotonic(),
                                                             seconds_of(msg.clock))), 100)
-        assert ros.wait_for(lambda: self.clock, timeout=10.0), 'no /clock from the world'
+        assert ros.wait_for(lambda: self.clock), 'no /clock from the world'
 
     def now(self):
         """Return the simulation time the world last published on /clock."""
@@ -184,9 +185,9 @@ class RunningWorld:
     def wait_ticks(self, count):
         """Wait until the world's step timer has fired count more times."""
         end = self.ticks + count
-        assert self.ros.wait_for(lambda: self.ticks >= end, timeout=10.0 + 0.1 * count)
+        assert self.ros.wait_for(lambda: self.ticks >= end, timeout=CALL_TIMEOUT + 0.1 * count)
 
-    def call(self, srv_type, service, request, *, timeout=10.0):
+    def call(self, srv_type, service, request, *, timeout=CALL_TIMEOUT):
         """
         Call a service of the world through a client kept for later.
 
@@ -203,7 +204,7 @@ class RunningWorld:
             f'{name} did not answer within {timeout} s'
         return future.result()
 
-    def spawn(self, name, xml, pose=None, frame='', namespace='', *, timeout=10.0):
+    def spawn(self, name, xml, pose=None, frame='', namespace='', *, timeout=CALL_TIMEOUT):
         """Ask for a model to be spawned; return the answer."""
         return self.call(SpawnModel, 'spawn_urdf_model', SpawnModel.Request(
             model_name=name, model_xml=xml, robot_namespace=namespace,
@@ -241,9 +242,9 @@ class RunningWorld:
     def published_topics(self):
         """Return the topics the world publishes (its sensor node too), once all are made."""
         # The world makes a model's topics right after it answers the spawn.
-        assert self.ros.wait_for(
-            lambda: all(model.topics_made for model in list(self.node.models.values())),
-            timeout=10.0), 'the world did not make the topics of its models'
+        assert self.ros.wait_for(lambda: all(
+            model.topics_made for model in list(self.node.models.values()))), \
+            'the world did not make the topics of its models'
         publishers = list(self.node.publishers) + self.node.sensor_node.publishers
         return {publisher.topic_name for publisher in publishers}
 

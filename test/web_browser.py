@@ -68,7 +68,7 @@ class Browser:
                                                '.mantine-Notification-closeButton'):
             close.click()
 
-    def button(self, label, *, timeout=10.0):
+    def button(self, label, *, timeout=30.0):
         """Return the page's button with this label, once it is there."""
         return self._wait(lambda: self.driver.find_elements(
             'xpath', f"//button[normalize-space()='{label}']"), timeout, f'button {label!r}')[0]
@@ -83,7 +83,7 @@ class Browser:
             'xpath', f"//label[normalize-space()='{label}']"), 10.0, f'checkbox {label!r}')[0]
         label_element.click()
 
-    def choose(self, label, option, *, timeout=10.0):
+    def choose(self, label, option, *, timeout=30.0):
         """Open the dropdown with this label and click one of its options."""
         label_element = self._wait(lambda: self.driver.find_elements(
             'xpath', f"//label[normalize-space()='{label}']"), timeout, f'dropdown {label!r}')[0]
@@ -92,7 +92,7 @@ class Browser:
             'xpath', f"//*[@role='option' and normalize-space()='{option}']"), timeout,
             f'option {option!r} of {label!r}')[0].click()
 
-    def panel_image(self, *, timeout=10.0):
+    def panel_image(self, *, timeout=30.0):
         """Return the picture the panel shows (a robot camera's), as an RGB array."""
         image = self._wait(lambda: [element for element in self.driver.find_elements(
             'xpath', "//img[starts-with(@src, 'blob:')]") if element.size['height'] > 10],
@@ -118,12 +118,12 @@ class Browser:
         """Return the page's visible text."""
         return self.driver.find_element('tag name', 'body').text
 
-    def wait_for_text(self, fragment, *, timeout=15.0):
+    def wait_for_text(self, fragment, *, timeout=30.0):
         """Wait until the page shows a piece of text; return the page's text."""
         self._wait(lambda: fragment in self.text(), timeout, f'{fragment!r} on the page')
         return self.text()
 
-    def wait_for_line(self, start, *, timeout=15.0):
+    def wait_for_line(self, start, *, timeout=30.0):
         """Wait until a line of the page's text starts with start; return that line."""
         def line():
             return [text for text in self.text().splitlines() if text.startswith(start)]

@@ -36,8 +36,13 @@ from simulation_interfaces.srv import DeleteEntity, GetEntities, GetEntityState
 from simulation_interfaces.srv import GetSimulationState, ResetSimulation, SetEntityState
 from simulation_interfaces.srv import SetSimulationState, SpawnEntity, StepSimulation
 
-# Wall time a service call may take before the test fails, in s.
-CALL_TIMEOUT = 10.0
+# Wall time a service call or an awaited event may take before the test fails, in s: a net for a
+# world that hangs, not a speed limit. 10 s failed a world start on a machine with both cores
+# burnt beside three test workers.
+CALL_TIMEOUT = 30.0
+# Wall time each step asked for may add to that, in s: worlds whose sensors cast and render at
+# every step, on a machine as busy, took more than 20 ms a step.
+STEP_TIMEOUT = 0.05
 # Wall time the world may take to start (imports, models, discovery), in s.
 START_TIMEOUT = 60.0
 # /clock as the world publishes it: the latest time, kept for a late subscriber.
@@ -167,7 +172,7 @@ class SimulatedWorld:
         publish in reaction is there for the next steps.
         """
         steps = whole_steps(steps)
-        timeout = CALL_TIMEOUT + 1e-3 * steps if timeout is None else timeout
+        timeout = CALL_TIMEOUT + STEP_TIMEOUT * steps if timeout is None else timeout
         self._wait_until_new_subscribers_are_heard()
         end_ns = self._time_ns + round(steps * self.timestep * NANOSECONDS)
         half_step_ns = round(self.timestep * NANOSECONDS / 2)

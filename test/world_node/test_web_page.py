@@ -22,6 +22,7 @@ from service_tutorial.lesson.robot_turning_server import RobotTurningServer
 from service_tutorial.lesson.turning_input import NOT_A_NUMBER, VELOCITY_TOO_HIGH
 from service_tutorial.sim.plugins.camera_sensor import CameraSensor
 from service_tutorial.sim.plugins.ray_sensor import RaySensor
+from service_tutorial.testing.simulated_world import CALL_TIMEOUT
 from service_tutorial.world_node.pacing import MAX_TICK_SIMULATED
 from service_tutorial.world_node.web.page import UPDATE_RATE
 from srv_interfaces.srv import GetModelList
@@ -72,8 +73,7 @@ class WebWorld:
         return state
 
     def heading_at_rest(self):
-        assert self.ros.wait_for(lambda: abs(self.tinybot().twist.angular.z) < 1e-3,
-                                 timeout=10.0)
+        assert self.ros.wait_for(lambda: abs(self.tinybot().twist.angular.z) < 1e-3)
         return yaw_of(self.tinybot().pose.orientation)
 
     def sensor(self, kind):
@@ -84,7 +84,7 @@ class WebWorld:
         time.sleep(SHOWN)
         return self.browser.view(self.browser.screenshot())
 
-    def view_until(self, shows, what, *, timeout=15.0):
+    def view_until(self, shows, what, *, timeout=CALL_TIMEOUT):
         """Take views until shows(view) is true (a busy machine draws late); return it."""
         deadline = time.monotonic() + timeout
         while True:
@@ -93,7 +93,7 @@ class WebWorld:
                 assert shows(view), f'{what} within {timeout} s'
                 return view
 
-    def answer_after(self, click, expected, *, timeout=15.0):
+    def answer_after(self, click, expected, *, timeout=CALL_TIMEOUT):
         """Click a button, wait for the next answer and check it says expected; return it."""
         number = self.page.panel.answers + 1
         self.browser.click(click)
@@ -144,8 +144,8 @@ class TestWebPage:
         answered = time.monotonic()
         assert spawned.success, spawned.status_message
         # An event, not a time limit: how soon it comes is the benchmark's web section's.
-        assert web_world.ros.wait_for(lambda: web_world.page.scene.redraws > redraws,
-                                      timeout=10.0), 'the page did not draw R2-D2'
+        assert web_world.ros.wait_for(lambda: web_world.page.scene.redraws > redraws), \
+            'the page did not draw R2-D2'
         drawn = time.monotonic() - answered
         time.sleep(1.5)  # R2-D2 falls from 1 m and lands
         with_r2d2 = web_world.view_until(
@@ -172,7 +172,7 @@ class TestWebPage:
     def test_the_spawn_button_spawns_r2d2_through_the_world_service(self, web_world):
         web_world.answer_after('Spawn R2-D2', "SpawnModel: Successfully spawned entity 'r2d2'")
         assert 'r2d2' in web_world.model_names()
-        web_world.browser.wait_for_line('Models tinybot, r2d2', timeout=5.0)
+        web_world.browser.wait_for_line('Models tinybot, r2d2')
         web_world.answer_after('Delete R2-D2', "DeleteModel: Successfully deleted model 'r2d2'")
         assert 'r2d2' not in web_world.model_names()
 
@@ -194,7 +194,7 @@ class TestWebPage:
         before = web_world.heading_at_rest()
         web_world.browser.type_into('Time (s)', '2')
         web_world.browser.type_into('Velocity (rad/s)', '0.5')
-        web_world.answer_after('Turn', 'control_robot_angle: success True', timeout=20.0)
+        web_world.answer_after('Turn', 'control_robot_angle: success True')
         turned = math.remainder(web_world.heading_at_rest() - before, math.tau)
 
         # As test_turning_server's turns: 2 % and the few ticks the server's stop may be late.
@@ -218,10 +218,10 @@ class TestWebPage:
         start = web_world.tinybot().pose.position.x
         web_world.browser.click('Forward')
         assert web_world.ros.wait_for(
-            lambda: web_world.tinybot().pose.position.x > start + 0.05, timeout=5.0)
+            lambda: web_world.tinybot().pose.position.x > start + 0.05)
         web_world.browser.click('Stop')
         assert web_world.ros.wait_for(
-            lambda: abs(web_world.tinybot().twist.linear.x) < 1e-3, timeout=5.0)
+            lambda: abs(web_world.tinybot().twist.linear.x) < 1e-3)
         web_world.answer_after('Reset simulation', 'reset_simulation: done')
         position = web_world.tinybot().pose.position
         assert math.hypot(position.x, position.y) < 1e-3
@@ -233,13 +233,13 @@ class TestWebPage:
         assert red_pixels(web_world.view()) < 20
         web_world.browser.tick('Show lasers')
         try:
-            assert web_world.ros.wait_for(lambda: laser.active, timeout=5.0)
+            assert web_world.ros.wait_for(lambda: laser.active)
             # tinybot's scan: its hits on the yard's walls, a few hundred red pixels.
             web_world.view_until(lambda view: red_pixels(view) > 300,
                                  'laser points on the walls')
         finally:
             web_world.browser.tick('Show lasers')
-        assert web_world.ros.wait_for(lambda: not laser.active, timeout=5.0)
+        assert web_world.ros.wait_for(lambda: not laser.active)
         web_world.view_until(lambda view: red_pixels(view) < 20, 'the laser points gone')
 
     def test_a_chosen_camera_shows_its_image_in_the_panel_and_is_listened_to_only_then(
@@ -248,11 +248,10 @@ class TestWebPage:
         assert not camera.active, 'nobody listens to /camera/image_raw yet'
         web_world.browser.choose('Camera', '/camera/image_raw')
         try:
-            assert web_world.ros.wait_for(lambda: camera.active, timeout=5.0)
+            assert web_world.ros.wait_for(lambda: camera.active)
             # The first frame comes once the camera's renderer is made (software GL: seconds).
-            assert web_world.ros.wait_for(lambda: web_world.page.sensors.images_sent > 0,
-                                          timeout=30.0)
-            shown = web_world.browser.panel_image(timeout=30.0)
+            assert web_world.ros.wait_for(lambda: web_world.page.sensors.images_sent > 0)
+            shown = web_world.browser.panel_image()
             frame = camera.image  # tinybot stands still: every frame is the same
         finally:
             web_world.browser.choose('Camera', 'none')
@@ -261,9 +260,8 @@ class TestWebPage:
         seen = np.asarray(Image.fromarray(shown).resize((width, height))).astype(int)
         assert frame.std() > 10.0, 'the yard should not look like one flat colour'
         assert np.abs(seen - frame).mean() < 12.0, 'the panel should show what the camera sees'
-        assert web_world.ros.wait_for(lambda: not camera.active, timeout=5.0)
-        assert web_world.ros.wait_for(lambda: web_world.browser.panel_images() == 0,
-                                      timeout=5.0)
+        assert web_world.ros.wait_for(lambda: not camera.active)
+        assert web_world.ros.wait_for(lambda: web_world.browser.panel_images() == 0)
 
     def test_a_thousand_clicks_a_second_are_answered_or_dropped_and_the_world_keeps_pace(
             self, web_world):
@@ -282,7 +280,7 @@ class TestWebPage:
         # The browser's own client merges clicks that come faster than it sends them: those
         # that reach the world's process are answered or dropped, one spawn call at a time.
         assert reached > 0
-        assert web_world.ros.wait_for(lambda: panel.answers - answers == reached, timeout=10.0)
+        assert web_world.ros.wait_for(lambda: panel.answers - answers == reached)
         assert answer.model_names.count('r2d2') == 1
         assert factor > 0.5, f'real-time factor {factor:.2f} during the clicks'
         print(f"{reached} of 1000 clicks reached the page's client: "
@@ -294,13 +292,12 @@ class TestWebPage:
         laser, camera = web_world.sensor(RaySensor), web_world.sensor(CameraSensor)
         web_world.browser.tick('Show lasers')
         web_world.browser.choose('Camera', '/camera/image_raw')
-        assert web_world.ros.wait_for(lambda: laser.active and camera.active, timeout=5.0)
+        assert web_world.ros.wait_for(lambda: laser.active and camera.active)
         assert web_world.page.watchers == 1
         web_world.browser.close()
-        assert web_world.ros.wait_for(lambda: web_world.page.watchers == 0, timeout=10.0)
+        assert web_world.ros.wait_for(lambda: web_world.page.watchers == 0)
         # Nobody watches: the page stops listening, and sends nothing while the world runs on.
-        assert web_world.ros.wait_for(lambda: not (laser.active or camera.active), timeout=5.0)
+        assert web_world.ros.wait_for(lambda: not (laser.active or camera.active))
         updates, now = web_world.page.updates, web_world.world.now()
-        assert web_world.ros.wait_for(lambda: web_world.world.now() > now + 10.0 / UPDATE_RATE,
-                                      timeout=10.0)
+        assert web_world.ros.wait_for(lambda: web_world.world.now() > now + 10.0 / UPDATE_RATE)
         assert web_world.page.updates == updates
