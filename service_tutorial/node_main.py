@@ -99,12 +99,11 @@ def _interrupt_sets(event):
     """
     Let Ctrl-C set event, rather than raise KeyboardInterrupt, within the block.
 
-    rclpy's SIGINT handler wakes the executors and passes the signal on to Python's, which
-    raises KeyboardInterrupt at whatever the main thread runs next. Raised in a __del__ or in a
-    callback called from C, it is printed and dropped, and the server spun on for ever (seen
-    under load); raised once the spinning had ended, it escaped the teardown (exit status 1).
-    Set before rclpy.init, which keeps the handler it finds to pass signals on to. Only the
-    main thread may set a handler: elsewhere (a test that runs main()) nothing changes.
+    rclpy's SIGINT handler wakes the executors, shuts the contexts down and passes the signal on
+    to Python's, which raises KeyboardInterrupt at whatever the main thread runs next: once the
+    spinning had ended, in the teardown, which it escaped (exit status 1). Set before
+    rclpy.init, which keeps the handler it finds to pass signals on to. Only the main thread
+    may set a handler: elsewhere (a test that runs main()) nothing changes.
     """
     if threading.current_thread() is not threading.main_thread():
         yield
@@ -117,13 +116,38 @@ def _interrupt_sets(event):
 
 
 def _spin(node, interrupted, done):
+    """
+    Spin node on a thread of its own until Ctrl-C, shutdown or done; raise what a callback raised.
+
+    The main thread only waits, so that it sees Ctrl-C whatever holds the spinning up: a
+    callback that blocks, or the middleware's wait, seen hung far past its timeout under load.
+    The spinning normally ends within a turn; held up longer than LEAVING_TIME, it is left
+    behind (a daemon thread) and the program goes on to let its node go.
+    """
     executor = SingleThreadedExecutor()
     executor.add_node(node)
     finished = None if done is None else done(node)
     if finished is not None:
         finished.add_done_callback(lambda _: executor.wake())
+    ended = threading.Event()
+    failures = []
+
+    def spin():
+        try:
+            while rclpy.ok() and not interrupted.is_set() and not (finished and finished.done()):
+                executor.spin_once(timeout_sec=SIGNAL_LOOK_PERIOD)
+        except BaseException as error:
+            failures.append(error)
+        finally:
+            ended.set()
+
+    spinner = threading.Thread(target=spin, name=f'spin {node.get_name()}', daemon=True)
+    spinner.start()
     try:
-        while rclpy.ok() and not interrupted.is_set() and not (finished and finished.done()):
-            executor.spin_once(timeout_sec=SIGNAL_LOOK_PERIOD)
+        while not ended.wait(SIGNAL_LOOK_PERIOD) and not interrupted.is_set():
+            pass
+        executor.wake()
+        if ended.wait(LEAVING_TIME) and failures:
+            raise failures[0]
     finally:
         executor.shutdown(timeout_sec=0)

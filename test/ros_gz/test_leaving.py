@@ -90,3 +90,42 @@ def test_a_second_ctrl_c_while_a_server_leaves_lets_it_finish_leaving():
         server.communicate()
     assert out == 'left\n' and server.returncode == 0, err
     assert 'Traceback' not in err, err
+
+
+# A server whose timer callback blocks for ten minutes, as one that waits on a socket might.
+BLOCKED_SERVER = textwrap.dedent("""
+    import sys
+    import time
+
+    from rclpy.node import Node
+    from service_tutorial.node_main import spin_node
+
+
+    class Blocked(Node):
+        def __init__(self):
+            super().__init__('blocked')
+            self.timer = self.create_timer(0.01, self.block)
+
+        def block(self):
+            self.timer.cancel()
+            print('blocking', flush=True)
+            time.sleep(600.0)
+
+
+    sys.exit(spin_node(Blocked, args=['blocked']))
+""")
+
+
+def test_ctrl_c_ends_a_server_whose_spinning_is_held_up():
+    server = subprocess.Popen([sys.executable, '-c', BLOCKED_SERVER], stdout=subprocess.PIPE,
+                              stderr=subprocess.PIPE, text=True)
+    try:
+        assert server.stdout.readline() == 'blocking\n'
+        server.send_signal(signal.SIGINT)
+        # The spinning is given LEAVING_TIME to end, the middleware as long to let go.
+        out, err = server.communicate(timeout=2 * LEAVING_TIME + 30.0)
+    finally:
+        server.kill()
+        server.communicate()
+    assert server.returncode == 0, err
+    assert 'Traceback' not in err, err
