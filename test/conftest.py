@@ -17,6 +17,11 @@ from service_tutorial.testing.isolation import isolate_ros_graph
 # Wall time an awaited event or call may take before the test fails, in s: a net for a hang, not
 # a speed limit (SimulatedWorld's CALL_TIMEOUT; this module stays free of ROS imports).
 EVENT_TIMEOUT = 30.0
+# Wall time after which an idempotent call that got no answer is sent again, in s. A server in a
+# program just started can take a request before it has matched the caller's response reader;
+# the answer is then dropped (Fast DDS: 'client will not receive response'), and a client that
+# only waits, waits for ever.
+RESEND_PERIOD = 2.0
 
 # Before rclpy (and any node a test starts) reads the environment.
 isolate_ros_graph()
@@ -120,16 +125,28 @@ class RosHarness:
         self._action_clients.append(client)
         return client
 
-    def call(self, srv_type, service_name, request, *, timeout=EVENT_TIMEOUT):
-        """Call a service from the client node and return its response or fail the test."""
+    def call(self, srv_type, service_name, request, *, timeout=EVENT_TIMEOUT, idempotent=False):
+        """
+        Call a service from the client node and return its response or fail the test.
+
+        idempotent: asking twice does what asking once does (a query, setting a value), so the
+        request is sent again each RESEND_PERIOD s without an answer: its answer may be lost.
+        """
         client = self.client_node.create_client(srv_type, service_name)
         try:
             assert client.wait_for_service(timeout_sec=timeout), \
                 f'service {service_name} did not appear within {timeout} s'
-            future = client.call_async(request)
-            assert self.wait_for(future.done, timeout=timeout), \
-                f'service {service_name} did not answer within {timeout} s'
-            return future.result()
+            deadline = time.monotonic() + timeout
+            futures = [client.call_async(request)]
+
+            def answered():
+                return any(future.done() for future in futures)
+            while not self.wait_for(answered, timeout=min(
+                    RESEND_PERIOD if idempotent else timeout, deadline - time.monotonic())):
+                assert time.monotonic() < deadline, \
+                    f'service {service_name} did not answer within {timeout} s'
+                futures.append(client.call_async(request))
+            return next(future for future in futures if future.done()).result()
         finally:
             self.destroy(client)
 
@@ -159,13 +176,15 @@ class RosHarness:
         if not isinstance(value, ParameterValue):
             value = Parameter(name, value=value).get_parameter_value()
         request = SetParameters.Request(parameters=[ParameterMsg(name=name, value=value)])
-        return self.call(SetParameters, f'/{node_name}/set_parameters', request).results[0]
+        return self.call(SetParameters, f'/{node_name}/set_parameters', request,
+                         idempotent=True).results[0]
 
     def get_parameter(self, node_name, name):
         """Return one parameter's value from a node's get_parameters service."""
         from rcl_interfaces.srv import GetParameters
         request = GetParameters.Request(names=[name])
-        return self.call(GetParameters, f'/{node_name}/get_parameters', request).values[0]
+        return self.call(GetParameters, f'/{node_name}/get_parameters', request,
+                         idempotent=True).values[0]
 
     def start_world(self, **parameters):
         """Start the world node with these parameters; return it once its first /clock came."""

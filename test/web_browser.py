@@ -80,7 +80,7 @@ class Browser:
     def tick(self, label):
         """Tick or untick the checkbox with this label, as a click on its label does."""
         label_element = self._wait(lambda: self.driver.find_elements(
-            'xpath', f"//label[normalize-space()='{label}']"), 10.0, f'checkbox {label!r}')[0]
+            'xpath', f"//label[normalize-space()='{label}']"), 30.0, f'checkbox {label!r}')[0]
         label_element.click()
 
     def choose(self, label, option, *, timeout=30.0):
@@ -101,15 +101,16 @@ class Browser:
         return np.asarray(Image.open(io.BytesIO(image.screenshot_as_png)).convert('RGB'))
 
     def panel_images(self):
-        """Return how many pictures the panel shows."""
-        return len([element for element in self.driver.find_elements(
-            'xpath', "//img[starts-with(@src, 'blob:')]") if element.size['height'] > 10])
+        """Return how many pictures the panel shows, counted in the page at one moment."""
+        return self.driver.execute_script(
+            "return Array.from(document.querySelectorAll('img[src^=\"blob:\"]'))"
+            '.filter(image => image.getBoundingClientRect().height > 10).length;')
 
     def type_into(self, label, text):
         """Replace what the text field with this label holds, as typing would."""
         from selenium.webdriver.common.keys import Keys
         field = self._wait(lambda: self.driver.find_elements(
-            'xpath', f"//label[normalize-space()='{label}']/following::input[1]"), 10.0,
+            'xpath', f"//label[normalize-space()='{label}']/following::input[1]"), 30.0,
             f'field {label!r}')[0]
         field.send_keys(Keys.CONTROL, 'a')
         field.send_keys(text, Keys.ENTER)
@@ -151,9 +152,14 @@ class Browser:
 
     @staticmethod
     def _wait(find, timeout, what):
+        """Return what find() finds once it finds something; a replaced element is found anew."""
+        from selenium.common.exceptions import StaleElementReferenceException
         deadline = time.monotonic() + timeout
         while True:
-            found = find()
+            try:
+                found = find()
+            except StaleElementReferenceException:
+                found = None
             if found:
                 return found
             assert time.monotonic() < deadline, f'no {what} within {timeout} s'

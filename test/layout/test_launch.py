@@ -259,10 +259,12 @@ def test_ros2_launch_with_every_argument(launch_module, ros, tmp_path):
         ready = ('[lesson.mujoco]: MuJoCo world ready: tinybot, timestep 0.004 s, '
                  'real_time_factor 0.0')
         assert ros.wait_for(lambda: ready in launch.output(), timeout=60.0), launch.output()
-        models = ros.call(GetModelList, '/lesson/mujoco/get_model_list', GetModelList.Request())
+        models = ros.call(GetModelList, '/lesson/mujoco/get_model_list', GetModelList.Request(),
+                          idempotent=True)
         assert list(models.model_names) == ['tinybot']
         # The standard's services move with the namespace, as everything does.
-        entities = ros.call(GetEntities, '/lesson/get_entities', GetEntities.Request())
+        entities = ros.call(GetEntities, '/lesson/get_entities', GetEntities.Request(),
+                            idempotent=True)
         assert list(entities.entities) == ['tinybot']
         for node in ('lesson/mujoco', 'lesson/robot_turning_server'):
             assert ros.get_parameter(node, 'use_sim_time').bool_value is False, node
