@@ -7,12 +7,27 @@ give the middleware LEAVING_TIME, then end anyway. A server's Ctrl-C is a flag i
 not a KeyboardInterrupt that code in its way may drop.
 """
 
+import contextlib
 import signal
 import subprocess
 import sys
 import textwrap
 
 from service_tutorial.node_main import LEAVING_TIME
+
+
+@contextlib.contextmanager
+def started(program, first_line):
+    """Run a test program; yield it once it has printed first_line, kill it after."""
+    process = subprocess.Popen([sys.executable, '-c', program], stdout=subprocess.PIPE,
+                               stderr=subprocess.PIPE, text=True)
+    try:
+        assert process.stdout.readline() == first_line
+        yield process
+    finally:
+        process.kill()
+        process.communicate()
+
 
 # A server (spin_node) that shuts rclpy down from its first timer, and hangs in destroy_node.
 STUCK_SERVER = textwrap.dedent("""
@@ -77,17 +92,11 @@ SLOW_TO_LEAVE_SERVER = textwrap.dedent("""
 
 
 def test_a_second_ctrl_c_while_a_server_leaves_lets_it_finish_leaving():
-    server = subprocess.Popen([sys.executable, '-c', SLOW_TO_LEAVE_SERVER],
-                              stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    try:
-        assert server.stdout.readline() == 'spinning\n'
+    with started(SLOW_TO_LEAVE_SERVER, 'spinning\n') as server:
         server.send_signal(signal.SIGINT)
         assert server.stdout.readline() == 'leaving\n'
         server.send_signal(signal.SIGINT)  # an impatient user
         out, err = server.communicate(timeout=LEAVING_TIME)
-    finally:
-        server.kill()
-        server.communicate()
     assert out == 'left\n' and server.returncode == 0, err
     assert 'Traceback' not in err, err
 
@@ -117,15 +126,9 @@ BLOCKED_SERVER = textwrap.dedent("""
 
 
 def test_ctrl_c_ends_a_server_whose_spinning_is_held_up():
-    server = subprocess.Popen([sys.executable, '-c', BLOCKED_SERVER], stdout=subprocess.PIPE,
-                              stderr=subprocess.PIPE, text=True)
-    try:
-        assert server.stdout.readline() == 'blocking\n'
+    with started(BLOCKED_SERVER, 'blocking\n') as server:
         server.send_signal(signal.SIGINT)
         # The spinning is given LEAVING_TIME to end, the middleware as long to let go.
         out, err = server.communicate(timeout=2 * LEAVING_TIME + 30.0)
-    finally:
-        server.kill()
-        server.communicate()
     assert server.returncode == 0, err
     assert 'Traceback' not in err, err
