@@ -25,6 +25,8 @@ import yaml
 
 LAUNCH_FILE = os.path.join(ROOT, 'launch', 'world.launch.py')
 RVIZ_FILE = os.path.join(ROOT, 'config', 'world.rviz')
+# What rclpy warns when the middleware drops a service's answer (Fast DDS in Jazzy).
+LOST_ANSWER = 'failed to send response (timeout): client will not receive response'
 
 ARGUMENTS = {
     'params_file': "PathJoinSubstitution([FindPackageShare(PACKAGE), 'config', 'world.yaml'])",
@@ -277,7 +279,12 @@ def test_ros2_launch_with_every_argument(launch_module, ros, tmp_path):
     assert launch.process.returncode == 0, output
     for process in ('mujoco_world-1', 'robot_turning_server-2'):
         assert f'[INFO] [{process}]: process has finished cleanly' in output, output
-    # What the nodes print: information only, no warning, error or traceback.
+    # What the nodes print: information only, no warning, error or traceback. But for rclpy's
+    # warning (two lines) when the middleware drops an answer to a caller it has not yet
+    # matched: the test's own first calls race the discovery of a world just started, and ask
+    # again (RosHarness.call).
     printed = [line for line in output.splitlines()
                if line.startswith(('[mujoco_world-1]', '[robot_turning_server-2]'))]
+    printed = [line for line, before in zip(printed, [''] + printed)
+               if not any(LOST_ANSWER in text for text in (line, before))]
     assert printed and all('] [INFO] [' in line for line in printed), output
