@@ -80,12 +80,13 @@ class RosHarness:
         Spin a node on an executor of its own; it is destroyed after the test.
 
         settling: on a SettlingExecutor, which settle() waits for (the client node); otherwise
-        on a SingleThreadedExecutor, as `ros2 run` spins the world and the lesson's servers.
+        on a single-threaded executor, as `ros2 run` spins the world and the lesson's servers
+        (a StoppableExecutor: one that stops spinning before it is shut down).
         """
-        from rclpy.executors import SingleThreadedExecutor
         from service_tutorial.testing.settling_executor import SettlingExecutor
+        from service_tutorial.testing.settling_executor import StoppableExecutor
         executor = (SettlingExecutor(context=node.context) if settling
-                    else SingleThreadedExecutor(context=node.context))
+                    else StoppableExecutor(context=node.context))
         executor.add_node(node)
         thread = threading.Thread(target=executor.spin, daemon=True)
         thread.start()
@@ -206,8 +207,9 @@ class RosHarness:
         for client in self._action_clients:
             client.destroy()
         for node, executor, thread in reversed(self._spinning):
-            executor.shutdown(timeout_sec=5.0)
+            executor.stop()
             thread.join(timeout=5.0)
+            executor.shutdown(timeout_sec=5.0)
             node.destroy_node()
 
 

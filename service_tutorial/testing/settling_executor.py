@@ -8,6 +8,9 @@ Within a process, DDS hands a message to the readers of the same Context as it i
 what the world published before it answered is there for the nodes, and what they publish in
 reaction is there for the world when settle() returns. So the next steps start with it, and a
 test steps in lockstep with its nodes, the same way every time.
+
+Both executors here stop spinning on request (stop()), so that a test's thread ends before its
+executor is shut down.
 """
 
 import threading
@@ -16,20 +19,63 @@ from rclpy.executors import ConditionReachedException, ShutdownException
 from rclpy.executors import SingleThreadedExecutor, TimeoutException
 
 
-class SettlingExecutor(SingleThreadedExecutor):
+class StoppableExecutor(SingleThreadedExecutor):
+    """
+    A single-threaded executor whose spinning stop() ends before the executor is shut down.
+
+    rclpy's Executor.shutdown() destroys the executor's guard condition without waiting for a
+    spin on another thread to leave its wait set, which then fails on the destroyed guard
+    (AttributeError: 'NoneType' object has no attribute 'handle'). So a thread that spins an
+    executor is stopped and joined first, and the executor shut down after.
+    """
+
+    def __init__(self, *, context):
+        super().__init__(context=context)
+        self._stopping = False
+        self._stop_asked = lambda: self._stopping  # one function, kept (see _run_one)
+
+    def spin(self):
+        """Run callbacks until stop(), the Context's shutdown or a callback raises."""
+        while self.context.ok() and not self._stopping:
+            self._run_one(timeout_sec=None, until=self._stop_asked)
+
+    def stop(self):
+        """End spin() on its thread: it returns once the callback it runs, if any, has run."""
+        self._stopping = True
+        self.wake()
+
+    def _run_one(self, *, timeout_sec, until):
+        """
+        Run a ready callback, waiting up to timeout_sec or until until(); tell if one ran.
+
+        until is a function kept from call to call: rclpy makes its generator of ready
+        callbacks anew whenever the arguments change.
+        """
+        try:
+            handler, _, _ = self.wait_for_ready_callbacks(timeout_sec=timeout_sec,
+                                                          condition=until)
+        except (ConditionReachedException, ShutdownException, TimeoutException):
+            return False
+        handler()
+        if handler.exception() is not None:
+            raise handler.exception()
+        return True
+
+
+class SettlingExecutor(StoppableExecutor):
     """A single-threaded executor whose settle() waits until nothing is left to run."""
 
     def __init__(self, *, context):
         super().__init__(context=context)
         self._settled = threading.Event()
-        self._stopping = False
         self.failure = None  # what a callback raised: it ended the spinning
-        # Ends a wait for work: a test asked whether the nodes settled (one function, kept, so
-        # that the executor's generator of ready callbacks is not made anew on every call).
-        self._asked = lambda: not self._settled.is_set()
+        # Ends a wait for work: a test asked whether the nodes settled, or the spinning is to
+        # stop (one function, kept).
+        self._asked = lambda: self._stopping or not self._settled.is_set()
+        self._ready_now = lambda: self._stopping
 
     def spin(self):
-        """Run callbacks until shutdown or one raises, settling whenever nothing is left."""
+        """Run callbacks until stop() or shutdown or one raises, settling whenever none is left."""
         try:
             while self.context.ok() and not self._stopping:
                 if self._run_ready() == 0:
@@ -42,21 +88,9 @@ class SettlingExecutor(SingleThreadedExecutor):
     def _run_ready(self):
         """Run every callback ready now, from a fresh look at the wait set; return how many."""
         ran = 0
-        while self._run_one(timeout_sec=0.0):
+        while self._run_one(timeout_sec=0.0, until=self._ready_now):
             ran += 1
         return ran
-
-    def _run_one(self, *, timeout_sec, until=None):
-        """Run a ready callback, waiting up to timeout_sec or until until(); tell if one ran."""
-        try:
-            handler, _, _ = self.wait_for_ready_callbacks(
-                timeout_sec=timeout_sec, condition=until or (lambda: False))
-        except (ConditionReachedException, ShutdownException, TimeoutException):
-            return False
-        handler()
-        if handler.exception() is not None:
-            raise handler.exception()
-        return True
 
     def settle(self, timeout):
         """
@@ -71,8 +105,3 @@ class SettlingExecutor(SingleThreadedExecutor):
         if self.failure is not None:
             raise self.failure
         return settled
-
-    def shutdown(self, timeout_sec=None):
-        """Stop spinning (the spin thread ends) and let the nodes go."""
-        self._stopping = True
-        return super().shutdown(timeout_sec)

@@ -20,7 +20,6 @@ import time
 
 import rclpy
 from rclpy.context import Context
-from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rclpy.qos import DurabilityPolicy, qos_check_compatible, QoSCompatibility, QoSProfile
@@ -30,6 +29,7 @@ from rosgraph_msgs.msg import Clock
 from service_tutorial.conversions import make_pose, NANOSECONDS
 from service_tutorial.testing.isolation import claim_ros_domain, localhost_discovery
 from service_tutorial.testing.settling_executor import SettlingExecutor
+from service_tutorial.testing.settling_executor import StoppableExecutor
 from service_tutorial.world_node.subscribers import SUBSCRIBER_CHECK_PERIOD
 from simulation_interfaces.msg import EntityFilters, EntityState, Result, SimulationState
 from simulation_interfaces.srv import DeleteEntity, GetEntities, GetEntityState
@@ -153,7 +153,7 @@ class SimulatedWorld:
 
     def _spin(self, node, executor=None):
         """Spin a node on an executor and thread of its own, as if in a process of its own."""
-        executor = executor or SingleThreadedExecutor(context=self.context)
+        executor = executor or StoppableExecutor(context=self.context)
         executor.add_node(node)
         thread = threading.Thread(target=executor.spin, daemon=True,
                                   name=f'spin {node.get_name()}')
@@ -344,8 +344,9 @@ class SimulatedWorld:
     def close(self):
         """Stop every executor, destroy every node, shut the Context down, free the domain."""
         for node, executor, thread in reversed(self._spinning):
-            executor.shutdown(timeout_sec=5.0)
+            executor.stop()
             thread.join(timeout=5.0)
+            executor.shutdown(timeout_sec=5.0)
             node.destroy_node()
         self._spinning.clear()
         self._added.clear()
