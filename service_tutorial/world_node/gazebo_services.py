@@ -108,7 +108,7 @@ class GazeboServices:
         """Put every model back at its spawn pose; time goes on."""
         self.world.reset_world()
         self.node.after_reset()
-        self.node.get_logger().info('world reset: every model at its spawn pose')
+        self.node.get_logger().debug('world reset: every model at its spawn pose')
         return response
 
     def pause_physics_callback(self, request, response):

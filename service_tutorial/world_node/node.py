@@ -425,12 +425,17 @@ class MujocoWorld(Node):
             interface.destroy()
 
     def after_reset(self):
-        """Start the streams again from the world's time after a reset, and publish it."""
+        """
+        Start the streams again from the world's time after a reset, and publish that time.
+
+        The streams' messages of the reset state are due at once and go out at the next tick,
+        after the answer: published inside the call, they made a reset_world cost twice a
+        trivial service's round trip.
+        """
         self.pacer.timestep = self.world.timestep  # a world loaded may have its own
         self.pacer.anchor(self.world.time)
         self.pacer.restart(self.world.time, (ODOMETRY_STREAM, JOINT_STATES_STREAM))
         self.publish_clock()
-        self.publish_due()
 
     def destroy_node(self):
         """Close the viewer and the action server along with the node; stop passing logs on."""
