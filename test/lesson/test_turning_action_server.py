@@ -24,6 +24,9 @@ pytestmark = pytest.mark.ros
 
 # Wall-clock patience for one turn; the outcomes asserted are all in simulation time.
 TURN_TIMEOUT = 60.0
+# Wall time between two samples of the ground truth, each a service call: in real time tinybot
+# turns at most 0.016 rad in it, far less than the half turn that unwrapping allows.
+SAMPLE_PERIOD = 0.01
 
 
 class GroundTruth:
@@ -52,7 +55,7 @@ class GroundTruth:
     def follow_until(self, predicate, *, timeout=TURN_TIMEOUT):
         """Keep sampling until predicate() holds; return whether it came to hold."""
         return self.action_world.ros.wait_for(
-            lambda: self.sample() and predicate(), timeout=timeout, period=0.001)
+            lambda: self.sample() and predicate(), timeout=timeout, period=SAMPLE_PERIOD)
 
     def wait_at_rest(self):
         assert self.follow_until(lambda: abs(self.yaw_rate) < 1e-3), 'tinybot did not stop'

@@ -43,7 +43,7 @@ class TurningWorld:
 
     def heading_at_rest(self):
         """Tinybot's heading once it has stopped turning."""
-        assert self.ros.wait_for(lambda: abs(self.state().twist.angular.z) < 1e-3)
+        assert self.ros.wait_for(lambda: abs(self.state().twist.angular.z) < 1e-3, period=0.01)
         return self.heading()
 
     def turn_async(self, time_duration, angular_vel):

@@ -73,7 +73,8 @@ class WebWorld:
         return state
 
     def heading_at_rest(self):
-        assert self.ros.wait_for(lambda: abs(self.tinybot().twist.angular.z) < 1e-3)
+        assert self.ros.wait_for(lambda: abs(self.tinybot().twist.angular.z) < 1e-3,
+                                 period=0.01)
         return yaw_of(self.tinybot().pose.orientation)
 
     def sensor(self, kind):
