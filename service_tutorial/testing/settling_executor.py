@@ -33,6 +33,7 @@ class StoppableExecutor(SingleThreadedExecutor):
         super().__init__(context=context)
         self._stopping = False
         self._stop_asked = lambda: self._stopping  # one function, kept (see _run_one)
+        self._awaiting = set()  # tasks of coroutine callbacks that await something
 
     def spin(self):
         """Run callbacks until stop(), the Context's shutdown or a callback raises."""
@@ -48,18 +49,33 @@ class StoppableExecutor(SingleThreadedExecutor):
         """
         Run a ready callback, waiting up to timeout_sec or until until(); tell if one ran.
 
-        until is a function kept from call to call: rclpy makes its generator of ready
-        callbacks anew whenever the arguments change.
+        A coroutine callback that awaits something (an action's execute callback awaiting the
+        end of its goal) is handed out by rclpy first on every turn, before it waits for work,
+        and resumed to see whether it can go on: resuming it counts as a callback run only if
+        it ended, and the turn goes on to what else is ready; once the same one comes again, a
+        whole turn found nothing else. until is a function kept from call to call: rclpy makes
+        its generator of ready callbacks anew whenever the arguments change.
         """
-        try:
-            handler, _, _ = self.wait_for_ready_callbacks(timeout_sec=timeout_sec,
-                                                          condition=until)
-        except (ConditionReachedException, ShutdownException, TimeoutException):
-            return False
-        handler()
-        if handler.exception() is not None:
-            raise handler.exception()
-        return True
+        resumed = set()
+        while True:
+            try:
+                handler, _, _ = self.wait_for_ready_callbacks(timeout_sec=timeout_sec,
+                                                              condition=until)
+            except (ConditionReachedException, ShutdownException, TimeoutException):
+                return False
+            if handler in resumed:
+                return False
+            was_awaiting = handler in self._awaiting
+            handler()
+            if handler.exception() is not None:
+                raise handler.exception()
+            if handler.done() or handler.cancelled():
+                self._awaiting.discard(handler)
+                return True
+            self._awaiting.add(handler)
+            if not was_awaiting:
+                return True
+            resumed.add(handler)
 
 
 class SettlingExecutor(StoppableExecutor):
