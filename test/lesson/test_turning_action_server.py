@@ -1,4 +1,4 @@
-"""The turning action server through turn_robot, turning tinybot in the MuJoCo world."""
+"""The turning action server through turn_robot, turning tinybot in a world the test steps."""
 
 import math
 import os
@@ -12,100 +12,67 @@ from nav_msgs.msg import Odometry
 from programs import program_path
 import pytest
 from rcl_interfaces.srv import DescribeParameters
+from rclpy.action import ActionClient
 from rclpy.clock import ClockChange, TimeJump
 from rclpy.duration import Duration
+from rclpy.node import Node
 from rclpy.parameter import Parameter
 from service_tutorial.conversions import make_pose, seconds_of, time_msg, yaw_of
 from service_tutorial.lesson.model_services import model_path
 from service_tutorial.lesson.robot_turning_action_server import RobotTurningActionServer
+from service_tutorial.testing.simulated_world import SimulatedWorld
 from srv_interfaces.action import TurnRobot
 
 pytestmark = pytest.mark.ros
 
-# Wall-clock patience for one turn; the outcomes asserted are all in simulation time.
-TURN_TIMEOUT = 60.0
-# Wall time between two samples of the ground truth, each a service call: in real time tinybot
-# turns at most 0.016 rad in it, far less than the half turn that unwrapping allows.
-SAMPLE_PERIOD = 0.01
+# Steps taken at a time: tinybot's odometry period (20 ms), so that the server steers on every
+# odometry message, as it does in real time.
+CHUNK = 10
+# The most simulation time a test waits for tinybot to do what it should, in s.
+TURN_LIMIT = 60.0
 
 
-class GroundTruth:
-    """Tinybot's heading from /mujoco/get_model_state, summed in small steps to unwrap it."""
+class SteppedActionWorld:
+    """A paused world, the action server on its simulation time and a client; the test steps."""
 
-    def __init__(self, action_world):
-        self.action_world = action_world
-        self.samples = []  # (simulation time, yaw rate) of every sample taken
-        state = action_world.state()
-        self.last = yaw_of(state.pose.orientation)
-        self.turned = 0.0
-        self.time = seconds_of(state.header.stamp)
-        self.yaw_rate = state.twist.angular.z
+    def __init__(self, world_parameters=None, **server_parameters):
+        self.world = SimulatedWorld(**(world_parameters or {}))
+        try:
+            context = self.world.context
+            overrides = [Parameter('use_sim_time', value=True)]
+            overrides += [Parameter(name, value=value)
+                          for name, value in server_parameters.items()]
+            self.server = self.world.add_node(
+                RobotTurningActionServer(context=context, parameter_overrides=overrides))
+            user = self.world.add_node(Node('turning_test', context=context))
+            self.cmd_vel = []
+            user.create_subscription(Twist, '/cmd_vel', self.cmd_vel.append, 100)
+            self.action_client = ActionClient(user, TurnRobot, '/turn_robot')
+            assert self.action_client.wait_for_server(timeout_sec=10.0)
+        except BaseException:
+            self.world.close()
+            raise
 
-    def sample(self):
-        """Read the state once more; return it (always true, to sample inside wait_for)."""
-        state = self.action_world.state()
-        heading = yaw_of(state.pose.orientation)
-        self.turned += math.remainder(heading - self.last, math.tau)
-        self.last = heading
-        self.time = seconds_of(state.header.stamp)
-        self.yaw_rate = state.twist.angular.z
-        self.samples.append((self.time, self.yaw_rate))
-        return state
-
-    def follow_until(self, predicate, *, timeout=TURN_TIMEOUT):
-        """Keep sampling until predicate() holds; return whether it came to hold."""
-        return self.action_world.ros.wait_for(
-            lambda: self.sample() and predicate(), timeout=timeout, period=SAMPLE_PERIOD)
-
-    def wait_at_rest(self):
-        assert self.follow_until(lambda: abs(self.yaw_rate) < 1e-3), 'tinybot did not stop'
-
-    def follow_for(self, duration):
-        """Sample until `duration` more seconds of simulation time have passed."""
-        end = self.time + duration
-        assert self.follow_until(lambda: self.time >= end)
-
-
-class Goal:
-    """One goal sent through the test's action client, with the feedback it received."""
-
-    def __init__(self, action_world, angle, angular_vel):
-        self.ros = action_world.ros
-        self.feedback = []
-        future = action_world.action_client.send_goal_async(
-            TurnRobot.Goal(angle=angle, angular_vel=angular_vel),
-            feedback_callback=lambda msg: self.feedback.append(msg.feedback))
-        assert self.ros.wait_for(future.done), 'no answer to the goal'
-        self.handle = future.result()
-        self.result_future = self.handle.get_result_async() if self.handle.accepted else None
-
-    def done(self):
-        return self.result_future.done()
-
-    def result(self):
-        """Return the goal's status and result, waiting for them if need be."""
-        assert self.ros.wait_for(self.result_future.done, timeout=TURN_TIMEOUT)
-        response = self.result_future.result()
-        return response.status, response.result
-
-
-class ActionWorld:
-    """The world in real time, the action server on simulation time, and a client for both."""
-
-    def __init__(self, ros, world_parameters=None, **server_parameters):
-        self.ros = ros
-        self.world = ros.start_world(real_time_factor=1.0, **(world_parameters or {}))
-        overrides = [Parameter('use_sim_time', value=True)]
-        overrides += [Parameter(name, value=value) for name, value in server_parameters.items()]
-        self.server = ros.add_node(RobotTurningActionServer(parameter_overrides=overrides))
-        self.cmd_vel = ros.subscribe(Twist, '/cmd_vel')
-        self.action_client = ros.action_client(TurnRobot, '/turn_robot')
-        assert self.action_client.wait_for_server(timeout_sec=10.0)
+    def close(self):
+        self.action_client.destroy()
+        self.world.close()
 
     def state(self):
-        state = self.world.state('tinybot', 'world')
-        assert state.success, state.status_message
-        return state
+        """Tinybot's ground truth: pose and twist in the world."""
+        return self.world.entity_state('tinybot')
+
+    def step_until(self, predicate, *, limit=TURN_LIMIT, each=lambda: None):
+        """Step CHUNK steps at a time, each() after each, until predicate(); False past limit."""
+        end = self.world.time + limit
+        while not predicate():
+            if self.world.time >= end:
+                return False
+            self.world.step(CHUNK)
+            each()
+        return True
+
+    def step_for(self, seconds):
+        self.world.step(round(seconds / self.world.timestep))
 
     def turn(self, angle, angular_vel):
         """Turn by the action; return its status, result, feedback and the ground truth turn."""
@@ -122,9 +89,70 @@ class ActionWorld:
         return status, result, goal.feedback, truth.turned
 
 
+class GroundTruth:
+    """Tinybot's heading from the world's entity state after each chunk of steps, unwrapped."""
+
+    def __init__(self, action_world):
+        self.action_world = action_world
+        self.samples = []  # (simulation time, yaw rate) of every sample taken
+        state = action_world.state()
+        self.last = yaw_of(state.pose.orientation)
+        self.turned = 0.0
+        self.time = seconds_of(state.header.stamp)
+        self.yaw_rate = state.twist.angular.z
+
+    def sample(self):
+        """Read the state once more."""
+        state = self.action_world.state()
+        heading = yaw_of(state.pose.orientation)
+        self.turned += math.remainder(heading - self.last, math.tau)
+        self.last = heading
+        self.time = seconds_of(state.header.stamp)
+        self.yaw_rate = state.twist.angular.z
+        self.samples.append((self.time, self.yaw_rate))
+
+    def follow_until(self, predicate, *, limit=TURN_LIMIT):
+        """Step and sample until predicate() holds; return whether it came to hold in time."""
+        return self.action_world.step_until(predicate, limit=limit, each=self.sample)
+
+    def wait_at_rest(self):
+        self.sample()
+        assert self.follow_until(lambda: abs(self.yaw_rate) < 1e-3), 'tinybot did not stop'
+
+    def follow_for(self, duration):
+        """Step and sample until `duration` more seconds of simulation time have passed."""
+        end = self.time + duration
+        assert self.follow_until(lambda: self.time >= end)
+
+
+class Goal:
+    """One goal sent through the test's action client, with the feedback it received."""
+
+    def __init__(self, action_world, angle, angular_vel):
+        self.action_world = action_world
+        self.feedback = []
+        future = action_world.action_client.send_goal_async(
+            TurnRobot.Goal(angle=angle, angular_vel=angular_vel),
+            feedback_callback=lambda msg: self.feedback.append(msg.feedback))
+        assert action_world.world.wait_for(future.done), 'no answer to the goal'
+        self.handle = future.result()
+        self.result_future = self.handle.get_result_async() if self.handle.accepted else None
+
+    def done(self):
+        return self.result_future.done()
+
+    def result(self):
+        """Return the goal's status and result, stepping until they come if need be."""
+        assert self.action_world.step_until(self.done), 'no result'
+        response = self.result_future.result()
+        return response.status, response.result
+
+
 @pytest.fixture
-def action_world(ros):
-    return ActionWorld(ros)
+def action_world():
+    stepped = SteppedActionWorld()
+    yield stepped
+    stepped.close()
 
 
 def test_a_quarter_turn_left_ends_on_target_with_rising_feedback(action_world):
@@ -186,7 +214,7 @@ def test_a_cancel_stops_tinybot_at_once_and_returns_what_was_turned(action_world
     assert truth.yaw_rate == pytest.approx(0.5, abs=0.05), 'not turning at full speed yet'
 
     cancel = goal.handle.cancel_goal_async()
-    assert action_world.ros.wait_for(cancel.done)
+    assert action_world.world.wait_for(cancel.done)
     assert cancel.result().return_code == CancelGoal.Response.ERROR_NONE
     (accepted_at,) = canceled_at
     first_sample = len(truth.samples)
@@ -329,9 +357,9 @@ def turning_at_full_speed(action_world, angle, angular_vel):
 
 def told_to_stop_and_still(action_world):
     """Check that the last command was a stop and tinybot is still half a second later."""
-    assert action_world.ros.wait_for(lambda: action_world.cmd_vel[-1] == Twist())
+    assert action_world.world.wait_for(lambda: action_world.cmd_vel[-1] == Twist())
     told_to_stop = len(action_world.cmd_vel)
-    action_world.world.wait_sim(0.5)
+    action_world.step_for(0.5)
     assert abs(action_world.state().twist.angular.z) < 1e-3
     assert all(msg == Twist() for msg in action_world.cmd_vel[told_to_stop:])
 
@@ -339,10 +367,10 @@ def told_to_stop_and_still(action_world):
 def test_a_reset_during_a_goal_aborts_it_at_once_and_the_next_goal_succeeds(action_world):
     goal, _ = turning_at_full_speed(action_world, 3.0, 0.5)
 
-    action_world.world.empty('reset_simulation')
+    action_world.world.reset()
 
-    # Within a second of wall time from the world's answer to the reset.
-    assert action_world.ros.wait_for(goal.done, timeout=1.0), 'no result within 1 s'
+    # At once: without a step after the world's answer to the reset.
+    assert action_world.world.wait_for(goal.done), 'no result before the next step'
     status, result = goal.result()
     print(f'\nreset: {result.message}')
     assert status == GoalStatus.STATUS_ABORTED
@@ -358,15 +386,17 @@ def test_a_reset_during_a_goal_aborts_it_at_once_and_the_next_goal_succeeds(acti
 
 
 @pytest.fixture
-def world_odometry_world(ros, tmp_path):
+def world_odometry_world(tmp_path):
     """Tinybot with odometry from the simulator's ground truth, which a move shows."""
     urdf = pathlib.Path(model_path('tinybot.urdf')).read_text()
     encoder = '<odometry_source>0</odometry_source>'
     assert encoder in urdf
     path = tmp_path / 'tinybot_world_odometry.urdf'
     path.write_text(urdf.replace(encoder, '<odometry_source>1</odometry_source>'))
-    return ActionWorld(ros, world_parameters={
+    stepped = SteppedActionWorld(world_parameters={
         'models': [str(path)], 'model_names': ['tinybot'], 'model_namespaces': ['']})
+    yield stepped
+    stepped.close()
 
 
 @pytest.mark.parametrize('yaw_change, shift, jump', [
@@ -382,9 +412,9 @@ def test_a_robot_moved_during_a_goal_ends_it_and_is_told_to_stop(
     moved_to = make_pose(position.x + shift, position.y, position.z,
                          quaternion=(0.0, 0.0, math.sin(yaw / 2.0), math.cos(yaw / 2.0)))
 
-    assert action_world.world.set_state('tinybot', moved_to).success
+    action_world.world.set_entity_state('tinybot', moved_to)
 
-    assert truth.follow_until(goal.done, timeout=10.0)
+    assert truth.follow_until(goal.done, limit=10.0)
     status, result = goal.result()
     print(f'\nmoved: {result.message}')
     assert status == GoalStatus.STATUS_ABORTED
@@ -409,9 +439,9 @@ def test_a_tinybot_moved_during_a_goal_turns_the_rest_from_where_it_was_put(acti
     moved_to = make_pose(state.pose.position.x, state.pose.position.y, state.pose.position.z,
                          quaternion=(0.0, 0.0, math.sin(yaw / 2.0), math.cos(yaw / 2.0)))
 
-    assert action_world.world.set_state('tinybot', moved_to).success
+    action_world.world.set_entity_state('tinybot', moved_to)
 
-    assert truth.follow_until(goal.done, timeout=TURN_TIMEOUT)
+    assert truth.follow_until(goal.done)
     truth.wait_at_rest()
     status, result = goal.result()
     print(f'\nmoved tinybot: {result.message}; ground truth {truth.turned:.4f} rad')
@@ -425,17 +455,17 @@ def test_a_robot_deleted_during_a_goal_ends_it_once_odometry_has_been_silent(act
     goal, _ = turning_at_full_speed(action_world, 3.0, 0.5)
     world = action_world.world
 
-    assert world.delete('tinybot').success
-    deleted_at = world.now()
+    world.delete_entity('tinybot')
+    deleted_at = world.time
 
     status, result = goal.result()
     assert status == GoalStatus.STATUS_ABORTED
     assert result.message.startswith('no odometry on /odom for 1.0 s')
     # Ended by simulation time, one odom_timeout after the last odometry (the upper bound only
     # leaves room for the result's way back on a busy machine).
-    assert deleted_at + 0.9 < world.now() < deleted_at + 2.0
+    assert deleted_at + 0.9 < world.time < deleted_at + 2.0
     # The stop comes on /cmd_vel, which the result does not wait for.
-    assert action_world.ros.wait_for(lambda: action_world.cmd_vel[-1] == Twist())
+    assert world.wait_for(lambda: action_world.cmd_vel[-1] == Twist())
 
 
 def odometry(stamp, yaw):
