@@ -8,11 +8,11 @@ from geometry_msgs.msg import Twist
 from programs import program_path, run_program
 import pytest
 from rclpy.parameter import Parameter
-from service_tutorial.conversions import seconds_of, yaw_of
 from service_tutorial.lesson.robot_turning_action_client import ANGLE_PROMPT
 from service_tutorial.lesson.robot_turning_action_server import RobotTurningActionServer
 from service_tutorial.lesson.turning_input import NOT_A_NUMBER, VELOCITY_TOO_HIGH
 from srv_interfaces.action import TurnRobot
+from test_turning_action_server import GroundTruth as SteppedGroundTruth
 
 pytestmark = pytest.mark.ros
 CLIENT = program_path('robot_turning_action_client')
@@ -41,39 +41,13 @@ class ActionWorld:
         return state
 
 
-class GroundTruth:
-    """Tinybot's heading from /mujoco/get_model_state, summed in small steps to unwrap it."""
-
-    def __init__(self, action_world):
-        self.action_world = action_world
-        self.last = yaw_of(action_world.state().pose.orientation)
-        self.turned = 0.0
-        self.time = 0.0
-        self.yaw_rate = 0.0
-
-    def sample(self):
-        """Read the state once more; return it (always true, to sample inside wait_for)."""
-        state = self.action_world.state()
-        heading = yaw_of(state.pose.orientation)
-        self.turned += math.remainder(heading - self.last, math.tau)
-        self.last = heading
-        self.time = seconds_of(state.header.stamp)
-        self.yaw_rate = state.twist.angular.z
-        return state
+class GroundTruth(SteppedGroundTruth):
+    """The same ground truth of a world in real time: sampled every SAMPLE_PERIOD of wall time."""
 
     def follow_until(self, predicate):
         """Keep sampling until predicate() holds; return whether it came to hold."""
         return self.action_world.ros.wait_for(
             lambda: self.sample() and predicate(), timeout=REST_TIMEOUT, period=SAMPLE_PERIOD)
-
-    def wait_at_rest(self):
-        assert self.follow_until(lambda: abs(self.yaw_rate) < 1e-3), 'tinybot did not stop'
-
-    def follow_for(self, duration):
-        """Sample until `duration` more seconds of simulation time have passed."""
-        self.sample()
-        end = self.time + duration
-        assert self.follow_until(lambda: self.time >= end)
 
 
 def progress(stdout):

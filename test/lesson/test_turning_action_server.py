@@ -90,7 +90,7 @@ class SteppedActionWorld:
 
 
 class GroundTruth:
-    """Tinybot's heading from the world's entity state after each chunk of steps, unwrapped."""
+    """Tinybot's heading from its state, sampled after each chunk of steps and unwrapped."""
 
     def __init__(self, action_world):
         self.action_world = action_world
@@ -102,7 +102,7 @@ class GroundTruth:
         self.yaw_rate = state.twist.angular.z
 
     def sample(self):
-        """Read the state once more."""
+        """Read the state once more; return it."""
         state = self.action_world.state()
         heading = yaw_of(state.pose.orientation)
         self.turned += math.remainder(heading - self.last, math.tau)
@@ -110,6 +110,7 @@ class GroundTruth:
         self.time = seconds_of(state.header.stamp)
         self.yaw_rate = state.twist.angular.z
         self.samples.append((self.time, self.yaw_rate))
+        return state
 
     def follow_until(self, predicate, *, limit=TURN_LIMIT):
         """Step and sample until predicate() holds; return whether it came to hold in time."""
@@ -120,7 +121,8 @@ class GroundTruth:
         assert self.follow_until(lambda: abs(self.yaw_rate) < 1e-3), 'tinybot did not stop'
 
     def follow_for(self, duration):
-        """Step and sample until `duration` more seconds of simulation time have passed."""
+        """Follow tinybot until `duration` more seconds of simulation time have passed."""
+        self.sample()
         end = self.time + duration
         assert self.follow_until(lambda: self.time >= end)
 
