@@ -9,30 +9,15 @@ alternative, and GLFW needs a display).
 import copy
 import importlib
 import math
-import os
 import sys
 
 import mujoco
 import numpy as np
+from service_tutorial.sim.gl_backend import prefer_headless_gl
 
 # Clipping distances of the camera, in m: the floor stays visible up to FAR_CLIP.
 NEAR_CLIP = 0.02
 FAR_CLIP = 100.0
-
-
-def prefer_headless_gl():
-    """Make MuJoCo render through EGL when nobody chose a GL backend and there is no display."""
-    if os.environ.get('MUJOCO_GL') or os.environ.get('DISPLAY') or \
-            os.environ.get('WAYLAND_DISPLAY'):
-        return
-    os.environ['MUJOCO_GL'] = 'egl'
-    # mujoco picks its GL backend when it is imported, which has happened by now; let it pick
-    # again. The module moved in mujoco 4 (it was mujoco.gl_context before).
-    for name in ('mujoco.rendering.classic.gl_context', 'mujoco.gl_context'):
-        gl_context = sys.modules.get(name)
-        if gl_context is not None and hasattr(gl_context, '_MUJOCO_GL'):
-            importlib.reload(gl_context)
-            return
 
 
 def release_gl_context(context):

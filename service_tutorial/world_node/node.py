@@ -23,6 +23,7 @@ import time
 
 from rclpy.clock import Clock as WallClock, ClockType
 from rclpy.event_handler import PublisherEventCallbacks
+from rclpy.logging import LoggingSeverity
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from rclpy.task import Future
@@ -37,7 +38,7 @@ from service_tutorial.world_node.camera_stream import CAMERA_PARAMETERS, CameraS
 from service_tutorial.world_node.collections_between_ticks import CollectionsBetweenTicks
 from service_tutorial.world_node.gazebo_services import GazeboServices
 from service_tutorial.world_node.gz_bridge import GzBridge
-from service_tutorial.world_node.log_forwarding import forward_core_logs
+from service_tutorial.world_node.log_forwarding import forward_core_logs, log_here
 from service_tutorial.world_node.model_interface import ModelInterface
 from service_tutorial.world_node.pacing import CLOCK_STREAM, JOINT_STATES_STREAM
 from service_tutorial.world_node.pacing import heard_by_pacer, ODOMETRY_STREAM, Pacer
@@ -110,10 +111,10 @@ class MujocoWorld(Node):
             raise
         # The world is built: full collections never walk it again, nor fall into a call.
         self.collections = CollectionsBetweenTicks()
-        self.get_logger().info(
-            f'MuJoCo world ready: {", ".join(self.world.model_names()) or "no models"}, '
-            f'timestep {self.world.timestep} s, real_time_factor '
-            f'{parameters["real_time_factor"]}')
+        log_here(self.get_logger(), LoggingSeverity.INFO,
+                 f'MuJoCo world ready: {", ".join(self.world.model_names()) or "no models"}, '
+                 f'timestep {self.world.timestep} s, real_time_factor '
+                 f'{parameters["real_time_factor"]}')
 
     def serve(self, srv_type, srv_name, callback, **kwargs):
         """Create a service of the world, whose answers the pacer hears of (Pacer.answered)."""
