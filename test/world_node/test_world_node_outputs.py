@@ -45,7 +45,7 @@ MAST = ('<link name="mast_link"><inertial><mass value="0.05"/><inertia ixx="1e-4
 
 
 def test_clock_is_transient_local_with_depth_one(ros):
-    world = ros.start_world(real_time_factor=0.0)
+    world = ros.start_world(paused=True)
     qos = world.node.clock_pub.qos_profile
     assert (qos.durability, qos.reliability, qos.depth) == (
         DurabilityPolicy.TRANSIENT_LOCAL, ReliabilityPolicy.RELIABLE, 1)
@@ -133,7 +133,7 @@ def test_the_transforms_of_one_turn_go_out_in_one_tf_message(ros):
 
 
 def test_a_drive_whose_block_says_no_sends_no_tf(ros):
-    world = ros.start_world(real_time_factor=0.0)
+    world = ros.start_world(paused=True)
     quiet = read_model('tinybot').replace('<publish_odom_tf>true</publish_odom_tf>',
                                           '<publish_odom_tf>false</publish_odom_tf>')
     world.spawn_or_fail('quiet', quiet, make_pose(2.0), namespace='quiet')
@@ -143,10 +143,10 @@ def test_a_drive_whose_block_says_no_sends_no_tf(ros):
 
 
 def test_robot_description_reaches_a_subscriber_that_starts_after_the_world(ros):
-    world = ros.start_world(real_time_factor=0.0)
+    world = ros.start_world(paused=True)
     world.spawn_or_fail('tiny', read_model('tinybot'), make_pose(2.0), namespace='robots/tiny')
     world.spawn_or_fail('r2d2', read_model('r2d2'), make_pose(-2.0))
-    world.wait_sim(0.1)
+    world.step(50)
     descriptions = {}
     for topic in ('/robot_description', '/robots/tiny/robot_description'):
         descriptions[topic] = []
@@ -163,10 +163,11 @@ def test_robot_description_reaches_a_subscriber_that_starts_after_the_world(ros)
 
 
 def test_joint_states_cover_every_movable_joint(ros):
-    world = ros.start_world(real_time_factor=0.0)
+    world = ros.start_world(paused=True)
     with_mast = read_model('tinybot').replace('</robot>', MAST)
     world.spawn_or_fail('mast', with_mast, make_pose(2.0), namespace='mast')
     joint_states = ros.subscribe(JointState, '/mast/joint_states')
+    world.step(50)
     assert ros.wait_for(lambda: joint_states), 'no joint_states'
     assert sorted(joint_states[-1].name) == [
         'mast_joint', 'wheel_left_joint', 'wheel_right_joint']
@@ -183,7 +184,7 @@ def world_log(ros):
 
 
 def test_a_spawn_and_a_delete_appear_on_rosout_once_each(ros):
-    world = ros.start_world(real_time_factor=0.0)
+    world = ros.start_world(paused=True)
     log = world_log(ros)
     assert ros.wait_for(lambda: world.node.count_subscribers('/rosout') > 0)
     world.spawn_or_fail('r2d2', read_model('r2d2'), make_pose(-2.0))
@@ -192,12 +193,12 @@ def test_a_spawn_and_a_delete_appear_on_rosout_once_each(ros):
     spawned = (Log.INFO, "spawned model 'r2d2' at [-2.0, 0.0, 0.0]")
     deleted = (Log.INFO, "deleted model 'r2d2'")
     assert ros.wait_for(lambda: spawned in log and deleted in log, timeout=5.0), log
-    world.wait_sim(0.1)
+    world.step(50)
     assert log.count(spawned) == log.count(deleted) == 1
 
 
 def test_core_logs_reach_rosout_at_their_level(ros):
-    world = ros.start_world(real_time_factor=0.0)
+    world = ros.start_world(paused=True)
     log = world_log(ros)
     core = logging.getLogger('service_tutorial.world')
     assert ros.wait_for(lambda: world.node.count_subscribers('/rosout') > 0)
