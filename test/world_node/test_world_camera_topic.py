@@ -65,12 +65,12 @@ def test_frames_arrive_at_the_camera_rate(ros):
 
 
 def test_disabled_camera_has_no_topic_and_renders_nothing(ros):
-    world = ros.start_world()
+    world = ros.start_world(paused=True)
     images = ros.subscribe(Image, IMAGE_TOPIC)
     # The world sees the subscriber, and half a second of simulation time goes by: five frames
     # at the default rate, had the camera been enabled.
     assert ros.wait_for(lambda: world.node.count_subscribers(IMAGE_TOPIC) == 1, timeout=5.0)
-    world.wait_sim(0.5)
+    world.step(world.steps(0.5))
     assert world.node.count_publishers(IMAGE_TOPIC) == 0
     assert world.node.count_publishers(INFO_TOPIC) == 0
     assert images == []
