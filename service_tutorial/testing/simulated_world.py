@@ -20,6 +20,7 @@ import time
 
 import rclpy
 from rclpy.context import Context
+from rclpy.duration import Duration
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rclpy.qos import DurabilityPolicy, qos_check_compatible, QoSCompatibility, QoSProfile
@@ -167,13 +168,16 @@ class SimulatedWorld:
         """
         Take exactly steps steps of the paused world; return the simulation time after them.
 
-        Returns once the world has answered, /clock says so, and every node added with
-        add_node() has handled what came to it (SettlingExecutor.settle()): what the nodes
-        publish in reaction is there for the next steps.
+        What the nodes added with add_node() published before is in the world's hands when
+        the steps start: a velocity command acts from the first of them. Returns once the
+        world has answered, /clock says so, and every added node has handled what came to it
+        (SettlingExecutor.settle()): what the nodes publish in reaction is there for the next
+        steps.
         """
         steps = whole_steps(steps)
         timeout = CALL_TIMEOUT + STEP_TIMEOUT * steps if timeout is None else timeout
         self._wait_until_new_subscribers_are_heard()
+        self._wait_until_sent_messages_are_received()
         end_ns = self._time_ns + round(steps * self.timestep * NANOSECONDS)
         half_step_ns = round(self.timestep * NANOSECONDS / 2)
         self._ok('step_simulation', self.call(
@@ -202,6 +206,20 @@ class SimulatedWorld:
         if any(count > self._heard_subscribers.get(topic, 0) for topic, count in counts.items()):
             time.sleep(SUBSCRIBER_CHECK_PERIOD)
         self._heard_subscribers = counts
+
+    def _wait_until_sent_messages_are_received(self):
+        """
+        Wait until every subscriber has acknowledged what the added nodes' publishers sent.
+
+        The step request and a message published just before it travel apart: the world could
+        take its first steps before the message had come, and a command would act late.
+        Reliable publishers hear when their messages arrive; best-effort ones never wait.
+        """
+        for node, _ in self._added:
+            for publisher in node.publishers:
+                assert publisher.wait_for_all_acked(Duration(seconds=CALL_TIMEOUT)), \
+                    f'what {node.get_name()} sent on {publisher.topic_name} did not arrive ' \
+                    f'within {CALL_TIMEOUT:g} s'
 
     def _unmatched_publishers(self):
         """

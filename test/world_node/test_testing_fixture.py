@@ -71,6 +71,21 @@ def test_the_world_starts_paused_and_time_moves_only_by_step(mujoco_sim):
     assert mujoco_sim.entity_state('tinybot').pose.position.x > 0.05, 'step() did not drive'
 
 
+def test_a_command_published_just_before_step_acts_from_its_first_step(mujoco_sim):
+    cmd_vel = mujoco_sim.node.create_publisher(Twist, '/cmd_vel', 10)
+    assert mujoco_sim.wait_for(lambda: cmd_vel.get_subscription_count() > 0)
+    drive = mujoco_sim.world_node.world.models['tinybot'].drive()
+    command = Twist()
+    for turn in range(1, 31):
+        command.angular.z = 0.01 * turn  # each command a new one
+        before = mujoco_sim.time
+        cmd_vel.publish(command)
+        mujoco_sim.step(1)
+        # Taken by the world before the step, not by a tick after it.
+        assert drive.commanded_at == pytest.approx(before, abs=mujoco_sim.timestep / 2), \
+            f'command {turn} taken at {drive.commanded_at} s, not at {before} s'
+
+
 @pytest.mark.parametrize('mujoco_sim, steps', [({}, 1), ({}, 7), ({'timestep': 0.005}, 40)],
                          indirect=['mujoco_sim'])
 def test_step_moves_clock_by_exactly_n_timesteps(mujoco_sim, steps):
