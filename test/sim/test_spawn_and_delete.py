@@ -106,6 +106,27 @@ def test_a_description_is_built_again_when_its_mesh_files_change(tmp_path):
     assert world.models['gone'].description.missing_meshes == ('meshes/box.obj',)
 
 
+def test_a_mesh_folder_is_told_by_what_it_is_not_by_the_path_to_it(tmp_path):
+    shutil.copytree(TEST_MODELS, tmp_path / 'first')
+    shutil.copytree(TEST_MODELS, tmp_path / 'second')
+    box = tmp_path / 'second' / 'meshes' / 'box.obj'
+    box.write_text(box.read_text() + '# the second folder\n')  # other bytes, another size
+    link = tmp_path / 'link'
+    link.symlink_to(tmp_path / 'first')
+    urdf = read_file(os.path.join(TEST_MODELS, 'meshbot.urdf'))
+    world = World()
+    spawn_robot(world, 'direct', urdf, base_dir=str(tmp_path / 'first'))
+    spawn_robot(world, 'linked', urdf, base_dir=str(link), position=(2.0, 0.0, 0.0))
+    assert world.models['linked'].description is world.models['direct'].description
+    # The link now leads to the other folder: its meshes are read there.
+    link.unlink()
+    link.symlink_to(tmp_path / 'second')
+    spawn_robot(world, 'moved', urdf, base_dir=str(link), position=(4.0, 0.0, 0.0))
+    moved = world.models['moved'].description
+    assert moved is not world.models['direct'].description
+    assert all(path.startswith(str(tmp_path / 'second')) for path in moved.mesh_files)
+
+
 def test_missing_meshes_are_looked_for_at_every_spawn(caplog):
     world = World()
     for index in range(2):
@@ -149,7 +170,8 @@ def test_a_batch_of_one_text_digests_it_and_checks_its_meshes_once(monkeypatch):
     batch = cache.for_batch()
     loaded = [batch.load(urdf, folder) for _ in range(5)]
     assert all(description is loaded[0] for description in loaded)
-    assert len(stats) == len(set(stats)) == 4, stats  # meshbot's four mesh files, once each
+    # The folder and meshbot's four mesh files, once each.
+    assert len(stats) == len(set(stats)) == 5 and stats[0] == folder, stats
     # A batch's missing meshes are looked for once too, yet every batch looks again.
     missing = cache.for_batch()
     missing_urdf = read_file(MISSINGBOT)
