@@ -52,17 +52,15 @@ def rpy_quaternion(rpy):
 
 def principal_inertia(orientation, tensor):
     """
-    Return (principal moments, their axes' (w, x, y, z) quaternion) of an inertia tensor.
+    Return (principal moments, largest first; their axes' (w, x, y, z) quaternion) of an inertia.
 
     The tensor is given in a frame turned by orientation; the axes are in its parent.
     """
-    moments, axes = np.linalg.eigh(rotate_tensor(orientation, tensor))
-    # The axes are orthonormal, their determinant +1 or -1: its sign is the triple
-    # product's, which takes a fraction of np.linalg.det's time.
-    (a, b, c), (d, e, f), (g, h, i) = axes.tolist()
-    if a * (e * i - f * h) - b * (d * i - f * g) + c * (d * h - e * g) < 0.0:
-        axes[:, 2] = -axes[:, 2]
-    return moments, matrix_quaternion(axes)
+    moments, axes, local = np.zeros(3), np.zeros(9), np.zeros(4)
+    mujoco.mju_eig3(moments, axes, local, np.asarray(tensor, float).ravel())
+    quaternion = np.zeros(4)
+    mujoco.mju_mulQuat(quaternion, np.asarray(orientation, float), local)
+    return moments, quaternion
 
 
 def rotate_tensor(quaternion, tensor):

@@ -252,7 +252,7 @@ class _SpecBuilder:
             body.mass, body.inertia = 0.0, [0.0, 0.0, 0.0]
             return
         moments, principal = frames.principal_inertia(link.inertial_pose[1], link.inertia)
-        if not moments[0] > 0.0:
+        if not moments[-1] > 0.0:
             raise DescriptionError(f'link {quoted(link.name)} of model '
                                    f'{quoted(self._model.name)} has an inertia that is not '
                                    f'positive definite (principal moments {moments.tolist()})')

@@ -433,7 +433,7 @@ class _SpecBuilder:
         if key not in self._principal_inertias:
             self._principal_inertias[key] = frames.principal_inertia(orientation, tensor)
         moments, principal = self._principal_inertias[key]
-        if moments[0] <= 0.0:
+        if not moments[-1] > 0.0:
             raise UrdfError(f"link '{link.name}' inertia is not positive definite "
                             f'(principal moments {moments.tolist()})')
         body.mass = mass
