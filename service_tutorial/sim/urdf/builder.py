@@ -187,11 +187,16 @@ def _finite(array):
 def _pose(matrix, what):
     """Return (position, quaternion) of a 4x4 homogeneous transform."""
     if matrix is None:
-        return np.zeros(3), np.array([1.0, 0.0, 0.0, 0.0])
-    matrix = np.asarray(matrix, dtype=float)
-    if not _finite(matrix):
+        return np.zeros(3), np.array(frames.IDENTITY_QUATERNION)
+    # As Python floats, read once: most origins of a robot turn nothing, and need no MuJoCo
+    # call to say so (a cold spawn reads dozens).
+    values = np.asarray(matrix, dtype=float).ravel().tolist()
+    if not all(map(math.isfinite, values)):
         raise UrdfError(f'{what} origin contains NaN or infinity')
-    return matrix[:3, 3].copy(), frames.matrix_quaternion(matrix[:3, :3])
+    position = np.array(values[3:12:4])
+    if values[0] == values[5] == values[10] == 1.0:  # a rotation with a unit diagonal is none
+        return position, np.array(frames.IDENTITY_QUATERNION)
+    return position, frames.matrix_quaternion(np.asarray(matrix, dtype=float)[:3, :3])
 
 
 class _SpecBuilder:
