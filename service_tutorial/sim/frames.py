@@ -36,13 +36,6 @@ def yaw_quaternion(yaw):
     return quaternion
 
 
-def matrix_quaternion(matrix):
-    """Return the (w, x, y, z) quaternion of a 3x3 rotation matrix."""
-    quaternion = np.zeros(4)
-    mujoco.mju_mat2Quat(quaternion, np.ascontiguousarray(matrix, dtype=float).ravel())
-    return quaternion
-
-
 def rpy_quaternion(rpy):
     """Return the (w, x, y, z) quaternion of roll, pitch and yaw about fixed axes (URDF, SDF)."""
     quaternion = np.zeros(4)

@@ -1,5 +1,6 @@
 """URDF loading: geometry, joints, inertia, Gazebo blocks, and every input that is refused."""
 
+import io
 import math
 import os
 import re
@@ -119,6 +120,59 @@ def test_joint_origin_places_and_turns_the_child():
     half = math.pi / 4.0
     np.testing.assert_allclose(model.body_quat[wheel], [math.cos(half), math.sin(half), 0, 0],
                                atol=1e-9)
+
+
+def rotation(quaternion):
+    matrix = np.zeros(9)
+    mujoco.mju_quat2Mat(matrix, np.asarray(quaternion, dtype=float))
+    return matrix.reshape(3, 3)
+
+
+# Turns about each axis and all three, a pitch of a quarter turn (gimbal lock) among them.
+TURNS = ['0.3 0 0', '0 -1.1 0', '0 0 2.9', '0.4 -0.9 2.2', '-3 1.5707963267948966 0.5']
+
+
+def test_every_origin_is_the_pose_yourdfpy_reads():
+    """Joint, inertial and per-visual and per-collision origins land where yourdfpy puts them."""
+    yourdfpy = pytest.importorskip('yourdfpy')
+    parts = ['<link name="base"/>']
+    for index, rpy in enumerate(TURNS):
+        origin = f'<origin xyz="{index} {-index / 2} 0.{index}" rpy="{rpy}"/>'
+        geoms = ''.join(
+            f'<{kind}><origin xyz="0.{index} {number} 0" rpy="{TURNS[-1 - index]}"/>'
+            f'<geometry><box size="0.1 0.2 0.3"/></geometry></{kind}>'
+            for kind in ('visual', 'collision') for number in (1, 2))
+        parts += [f'<link name="l{index}"><inertial>{origin}<mass value="1"/><inertia '
+                  f'ixx="0.03" iyy="0.02" izz="0.01" ixy="0" ixz="0" iyz="0"/></inertial>'
+                  f'{geoms}</link>',
+                  joint(f'j{index}', 'base', f'l{index}', extra=origin.replace('0.', '1.'))]
+    text = robot(*parts)
+    model = compiled(load_urdf(text))
+    expected = yourdfpy.URDF.load(io.StringIO(text), build_scene_graph=False,
+                                  load_meshes=False).robot
+    for urdf_joint in expected.joints:
+        body = model.body(urdf_joint.child).id
+        np.testing.assert_allclose(model.body_pos[body], urdf_joint.origin[:3, 3], atol=1e-12)
+        np.testing.assert_allclose(rotation(model.body_quat[body]), urdf_joint.origin[:3, :3],
+                                   atol=1e-12)
+    for urdf_link in expected.links[1:]:
+        body = model.body(urdf_link.name).id
+        origin = urdf_link.inertial.origin
+        np.testing.assert_allclose(model.body_ipos[body], origin[:3, 3], atol=1e-12)
+        in_body = (rotation(model.body_iquat[body]) @ np.diag(model.body_inertia[body])
+                   @ rotation(model.body_iquat[body]).T)
+        np.testing.assert_allclose(
+            in_body, origin[:3, :3] @ np.diag([0.03, 0.02, 0.01]) @ origin[:3, :3].T,
+            atol=1e-12)
+        for group, shapes in ((builder.VISUAL_GROUP, urdf_link.visuals),
+                              (builder.COLLISION_GROUP, urdf_link.collisions)):
+            geoms = body_geoms(model, urdf_link.name, group)
+            assert len(geoms) == len(shapes) == 2
+            for geom, shape in zip(geoms, shapes):
+                np.testing.assert_allclose(model.geom_pos[geom], shape.origin[:3, 3],
+                                           atol=1e-12)
+                np.testing.assert_allclose(rotation(model.geom_quat[geom]),
+                                           shape.origin[:3, :3], atol=1e-12)
 
 
 def test_root_link_gets_a_free_joint():

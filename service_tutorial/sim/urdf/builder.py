@@ -27,6 +27,7 @@ from service_tutorial.sim.urdf.gazebo import read_sensor_plugin_blocks
 from service_tutorial.sim.urdf.hardened_xml import check_structure
 from service_tutorial.sim.urdf.hardened_xml import parse_model_xml
 from service_tutorial.sim.urdf.meshes import MeshLoader
+from service_tutorial.sim.urdf.origins import take_origins
 
 WORLD_LINK = 'world'
 DEFAULT_VISUAL_RGBA = (0.7, 0.7, 0.7, 1.0)
@@ -86,6 +87,7 @@ def load_urdf(model_xml, *, base_dir=None, package_resolver=None, timestep=0.002
     # yourdfpy needs plain tags; namespaced extension elements play no part here.
     for element in [element for element in root.iter('*') if element.tag[0] == '{']:
         element.getparent().remove(element)
+    origins = take_origins(root)
     # yourdfpy brings trimesh and scipy, about a second of CPU: imported by the first URDF
     # built, so that a program that only reads robot files (the lesson's clients) starts without.
     import yourdfpy
@@ -98,8 +100,8 @@ def load_urdf(model_xml, *, base_dir=None, package_resolver=None, timestep=0.002
         raise UrdfError(f'model_xml is not valid URDF: {error}') from None
     if not urdf.validate():
         raise UrdfError(f'model_xml is not valid URDF: {urdf.errors[0].msg}')
-    builder = _SpecBuilder(urdf.robot, base_dir, package_resolver, read_link_settings(root),
-                           timestep)
+    builder = _SpecBuilder(urdf.robot, origins, base_dir, package_resolver,
+                           read_link_settings(root), timestep)
     description = builder.build()
     sensor_blocks, sensor_notes = read_sensor_plugin_blocks(root)
     setups, plugin_notes = plugins.configure_plugins(read_plugin_blocks(root) + sensor_blocks,
@@ -184,26 +186,12 @@ def _finite(array):
     return all(map(math.isfinite, array.ravel().tolist()))
 
 
-def _pose(matrix, what):
-    """Return (position, quaternion) of a 4x4 homogeneous transform."""
-    if matrix is None:
-        return np.zeros(3), np.array(frames.IDENTITY_QUATERNION)
-    # As Python floats, read once: most origins of a robot turn nothing, and need no MuJoCo
-    # call to say so (a cold spawn reads dozens).
-    values = np.asarray(matrix, dtype=float).ravel().tolist()
-    if not all(map(math.isfinite, values)):
-        raise UrdfError(f'{what} origin contains NaN or infinity')
-    position = np.array(values[3:12:4])
-    if values[0] == values[5] == values[10] == 1.0:  # a rotation with a unit diagonal is none
-        return position, np.array(frames.IDENTITY_QUATERNION)
-    return position, frames.matrix_quaternion(np.asarray(matrix, dtype=float)[:3, :3])
-
-
 class _SpecBuilder:
     """Walks a yourdfpy robot from its root link and adds MuJoCo bodies for every link."""
 
-    def __init__(self, robot, base_dir, package_resolver, link_settings, timestep):
+    def __init__(self, robot, origins, base_dir, package_resolver, link_settings, timestep):
         self._robot = robot
+        self._origins = origins  # from take_origins()
         self._link_settings = link_settings
         self._timestep = timestep
         masses = [float(link.inertial.mass) for link in robot.links
@@ -267,7 +255,7 @@ class _SpecBuilder:
         root_body.name = root
         if world_joints:
             world_joint = world_joints[0]
-            position, orientation = _pose(world_joint.origin, f"joint '{world_joint.name}'")
+            position, orientation = self._pose(('joint', world_joint.name))
             root_position, root_orientation = tuple(position), tuple(orientation)
             anchored = True
             if world_joint.type != 'fixed':
@@ -287,7 +275,7 @@ class _SpecBuilder:
             if joint.child in visited:
                 raise UrdfError(f"joints form a loop at link '{joint.child}'")
             visited.add(joint.child)
-            position, orientation = _pose(joint.origin, f"joint '{joint.name}'")
+            position, orientation = self._pose(('joint', joint.name))
             # Fields are set on the new element: add_body(name=..., pos=...) and the other
             # add_*() cost MuJoCo's bindings several microseconds more per element.
             body = parent_body.add_body()
@@ -356,8 +344,8 @@ class _SpecBuilder:
             # MuJoCo's gravity compensation: a force that holds the body's weight.
             body.gravcomp = 1.0
         colour = self._gazebo_colour(settings.material, link_name)
-        for visual in link.visuals:
-            geom = self._add_geom(body, visual.geometry, visual.origin, link_name)
+        for index, visual in enumerate(link.visuals):
+            geom = self._add_geom(body, visual.geometry, ('visual', link_name, index), link_name)
             if geom is None:
                 continue
             geom.contype = 0
@@ -365,9 +353,9 @@ class _SpecBuilder:
             geom.group = VISUAL_GROUP
             geom.rgba = colour if colour is not None else self._visual_rgba(visual, link_name)
         solref = self._contact_solref(settings)
-        for collision in link.collisions:
-            geom = self._add_geom(body, collision.geometry, collision.origin, link_name,
-                                  collision=True)
+        for index, collision in enumerate(link.collisions):
+            geom = self._add_geom(body, collision.geometry, ('collision', link_name, index),
+                                  link_name, collision=True)
             if geom is None:
                 continue
             geom.group = COLLISION_GROUP
@@ -382,6 +370,13 @@ class _SpecBuilder:
                     geom.condim = 1
             if not self._collides or self._collides[-1][0] != link_name:
                 self._collides.append((link_name, settings.self_collide))
+
+    def _pose(self, key):
+        """Return (position, quaternion) of the origin at key (take_origins()); none is zero."""
+        pose = self._origins.get(key)
+        if pose is None:
+            return np.zeros(3), np.array(frames.IDENTITY_QUATERNION)
+        return pose
 
     def _gazebo_colour(self, material, link_name):
         """Return the colour a <gazebo> material gives a link's visuals, or None."""
@@ -428,7 +423,7 @@ class _SpecBuilder:
         mass = float(inertial.mass)
         if not math.isfinite(mass) or mass <= 0.0:
             raise UrdfError(f"link '{link.name}' mass must be positive: {mass}")
-        position, orientation = _pose(inertial.origin, f"link '{link.name}' inertial")
+        position, orientation = self._pose(('inertial', link.name))
         tensor = np.asarray(inertial.inertia if inertial.inertia is not None else np.eye(3),
                             dtype=float)
         if not _finite(tensor):
@@ -449,7 +444,7 @@ class _SpecBuilder:
     def _add_geom(self, body, geometry, origin, link_name, collision=False):
         """Add a link's geometry to its body; return the geom, or None if it is left out."""
         what = f"link '{link_name}'"
-        position, orientation = _pose(origin, f'{what} geometry')
+        position, orientation = self._pose(origin)
         mesh_name = None
         if geometry.mesh is not None:
             mesh_name = self.meshes.add(geometry.mesh, what, collision=collision)
