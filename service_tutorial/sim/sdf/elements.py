@@ -61,6 +61,9 @@ QUIET = {
 WORLD_SYSTEMS = ('physics', 'sensors', 'imu', 'scene-broadcaster', 'user-commands', 'contact',
                  'navsat', 'forcetorque', 'magnetometer', 'air-pressure', 'altimeter')
 _TRUE, _FALSE = ('true', '1'), ('false', '0')
+# Per kind of element, the children that are read or quiet: looked up for each element read.
+_KNOWN = {kind: frozenset(READ.get(kind, ()) + QUIET.get(kind, ()))
+          for kind in {**READ, **QUIET}}
 
 
 def is_world_system(filename):
@@ -83,7 +86,7 @@ class Notes:
 
     def children(self, element, kind, what):
         """Note the children of an element of a kind that are neither read nor quiet."""
-        known = READ.get(kind, ()) + QUIET.get(kind, ())
+        known = _KNOWN.get(kind, frozenset())
         for child in element:
             if isinstance(child.tag, str) and child.tag not in known:
                 self.add(f'<{child.tag[:40]}>', what)
@@ -95,24 +98,31 @@ class Notes:
             yield f'{element} of {owners[0]}{more}'
 
 
+def first_child(element, tag):
+    """Return an element's first child of a tag, or None."""
+    # Not element.find(tag): lxml's path machinery takes twice as long, read hundreds of
+    # times for each model.
+    return next(element.iterchildren(tag), None)
+
+
 def child_text(element, tag):
     """Return the stripped text of an element's child, or None if it has none."""
-    child = element.find(tag)
+    child = first_child(element, tag)
     return None if child is None else (child.text or '').strip()
 
 
 def numbers(text, count, what, *, limit=None):
     """Return count finite numbers of a text, each at most limit in magnitude."""
     try:
-        values = [float(token) for token in text.split()]
+        values = list(map(float, text.split()))
     except ValueError:
         raise DescriptionError(f'{what} is not {count} numbers: {quoted(text)}') from None
     if len(values) != count:
         raise DescriptionError(f'{what} must be {count} numbers, not {len(values)}: '
                                f'{quoted(text)}')
-    if not all(math.isfinite(value) for value in values):
+    if not all(map(math.isfinite, values)):
         raise DescriptionError(f'{what} holds NaN or infinity: {quoted(text)}')
-    if limit is not None and any(abs(value) > limit for value in values):
+    if limit is not None and max(map(abs, values), default=0.0) > limit:
         raise DescriptionError(f'{what} is absurd, beyond {limit:g} in magnitude: '
                                f'{quoted(text)}')
     return values

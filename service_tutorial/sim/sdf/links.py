@@ -18,7 +18,8 @@ import numpy as np
 
 from service_tutorial.sim.description import UrdfError
 from service_tutorial.sim.plugins import kind_of
-from service_tutorial.sim.sdf.elements import boolean, child_text, MAX_INERTIA, MAX_MASS
+from service_tutorial.sim.sdf.elements import boolean, child_text, first_child, MAX_INERTIA
+from service_tutorial.sim.sdf.elements import MAX_MASS
 from service_tutorial.sim.sdf.elements import MAX_SCALE, name_of, number, numbers
 from service_tutorial.sim.sdf.paths import UriMissing, UriRefused
 from service_tutorial.sim.sdf.poses import compose, IDENTITY, read_pose, relative
@@ -96,11 +97,11 @@ class LinkReader:
         if boolean(element, 'kinematic', False, what):
             self.reading.notes.add('<kinematic>', what)
         pose = self.graph.pose(name, f'link {quoted(name)}')
-        mass, inertial_pose, inertia = self._inertial(element.find('inertial'), pose, what)
+        mass, inertial_pose, inertia = self._inertial(first_child(element, 'inertial'), pose, what)
         shapes = {'collision': [], 'visual': []}
         for kind in shapes:
             names = set()
-            for child in element.findall(kind):
+            for child in element.iterchildren(kind):
                 shape_name = name_of(child, what)
                 if shape_name in names:
                     raise DescriptionError(f'{what} has two {kind}s named {quoted(shape_name)}')
@@ -118,11 +119,11 @@ class LinkReader:
     def _sensors(self, element, link_name, link_pose, what):
         """Return the PluginBlocks of a link's <sensor>s, naming those not simulated."""
         blocks = []
-        for child in element.findall('sensor'):
+        for child in element.iterchildren('sensor'):
             sensor_name = name_of(child, what)
             shown = f'sensor {quoted(sensor_name)} of {what}'
             try:
-                sensor = sensor_block(child, link_name, self._in_link(child.find('pose'),
+                sensor = sensor_block(child, link_name, self._in_link(first_child(child, 'pose'),
                                                                       link_pose, shown))
             except UrdfError as error:
                 raise DescriptionError(str(error)) from None
@@ -154,7 +155,7 @@ class LinkReader:
         mass = number(element, 'mass', 1.0, shown, maximum=MAX_MASS)
         if mass <= 0.0 and not self.static:
             raise DescriptionError(f'{shown} <mass> must be positive: {mass:g}')
-        inertia = element.find('inertia')
+        inertia = first_child(element, 'inertia')
         values = {}
         for key, default in (('ixx', 1.0), ('iyy', 1.0), ('izz', 1.0), ('ixy', 0.0),
                              ('ixz', 0.0), ('iyz', 0.0)):
@@ -164,13 +165,13 @@ class LinkReader:
         tensor = np.array([[values['ixx'], values['ixy'], values['ixz']],
                            [values['ixy'], values['iyy'], values['iyz']],
                            [values['ixz'], values['iyz'], values['izz']]])
-        return mass, self._in_link(element.find('pose'), link_pose, shown), tensor
+        return mass, self._in_link(first_child(element, 'pose'), link_pose, shown), tensor
 
     def _shape(self, element, kind, name, link_pose, what):
         """Return the Shape of a <collision> or <visual>, or None if it has none to build."""
         shown = f'{kind} {quoted(name)} of {what}'
         self.reading.notes.children(element, kind, shown)
-        geometry = element.find('geometry')
+        geometry = first_child(element, 'geometry')
         if geometry is None:
             raise DescriptionError(f'{shown} has no <geometry>')
         self.reading.notes.children(geometry, 'geometry', shown)
@@ -181,7 +182,7 @@ class LinkReader:
         shape = found[0]
         if shape.tag not in SHAPES:
             return None  # <empty/>, or noted above as not simulated
-        pose = self._in_link(element.find('pose'), link_pose, shown)
+        pose = self._in_link(first_child(element, 'pose'), link_pose, shown)
         fields = {'name': name, 'kind': shape.tag, 'pose': pose}
         if shape.tag == 'mesh':
             fields.update(self._mesh(shape, shown))
@@ -215,7 +216,7 @@ class LinkReader:
     def _mesh(self, shape, shown):
         """Return the fields of a mesh: its uri, real path or why it is left out, scale."""
         self.reading.notes.children(shape, 'mesh', shown)
-        if shape.find('submesh') is not None:
+        if first_child(shape, 'submesh') is not None:
             self.reading.notes.add('<submesh> (the whole mesh is used)', shown)
         uri = child_text(shape, 'uri') or ''
         if not uri:
@@ -239,11 +240,11 @@ class LinkReader:
 
     def _colour(self, element, shown):
         """Return a visual's RGBA: its diffuse or ambient, a Gazebo material script's, or None."""
-        material = element.find('material')
+        material = first_child(element, 'material')
         if material is None:
             return None
         rgba = None
-        script = material.find('script')
+        script = first_child(material, 'script')
         if script is not None and child_text(script, 'name'):
             rgba = gazebo_colour(child_text(script, 'name'))
         for tag in ('ambient', 'diffuse'):
@@ -251,7 +252,8 @@ class LinkReader:
             if text:
                 values = numbers(text, len(text.split()) if len(text.split()) in (3, 4) else 4,
                                  f'{shown} <material><{tag}>')
-                rgba = tuple(np.clip(values + [1.0] * (4 - len(values)), 0.0, 1.0))
+                rgba = tuple(min(max(value, 0.0), 1.0)
+                             for value in values + [1.0] * (4 - len(values)))
         transparency = number(element, 'transparency', 0.0, shown, minimum=0.0, maximum=1.0)
         if rgba is not None and transparency:
             rgba = rgba[:3] + (rgba[3] * (1.0 - transparency),)
@@ -259,11 +261,11 @@ class LinkReader:
 
     def _friction(self, element, shown):
         """Return a collision's friction, ODE's mu and mu2 (the smaller), or None."""
-        surface = element.find('surface')
+        surface = first_child(element, 'surface')
         if surface is None:
             return None
-        friction = surface.find('friction')
-        ode = friction.find('ode') if friction is not None else None
+        friction = first_child(surface, 'friction')
+        ode = first_child(friction, 'ode') if friction is not None else None
         if ode is None:
             return None
         values = [number(ode, tag, None, f'{shown} <surface><friction><ode>', maximum=1e9)

@@ -12,6 +12,8 @@ SDF 1.8 a nested model's frames by scope (a::b). A cycle of relative_to or attac
 name that is no frame, is refused with the element named.
 """
 
+import math
+
 import numpy as np
 
 from service_tutorial.sim import frames
@@ -46,15 +48,17 @@ def read_pose(element, version, what):
                                f'{quoted(element.get("rotation_format"))}: euler_rpy or '
                                'quat_xyzw')
     values = numbers(text, 6, shown)
-    if any(abs(value) > MAX_COORDINATE for value in values[:3]):
+    if max(map(abs, values[:3])) > MAX_COORDINATE:
         raise DescriptionError(f'{shown} is absurd: its position is beyond '
                                f'{MAX_COORDINATE:g} m: {quoted(text)}')
-    angles = np.array(values[3:])
+    angles = values[3:]
     if version >= (1, 9) and (element.get('degrees') or '').strip().lower() in ('true', '1'):
-        angles = np.radians(angles)
-    if np.abs(angles).max() > MAX_ANGLE:
+        angles = list(map(math.radians, angles))
+    if max(map(abs, angles)) > MAX_ANGLE:
         raise DescriptionError(f'{shown} is absurd: an angle is beyond {MAX_ANGLE:g} rad: '
                                f'{quoted(text)}')
+    if not any(angles):  # most poses of a model turn nothing, and need no MuJoCo call
+        return (np.array(values[:3]), np.array(frames.IDENTITY_QUATERNION)), relative_to
     return (np.array(values[:3]), frames.rpy_quaternion(angles)), relative_to
 
 

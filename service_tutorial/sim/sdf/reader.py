@@ -25,7 +25,7 @@ import numpy as np
 from service_tutorial.sim import frames
 from service_tutorial.sim.plugins import kind_of
 from service_tutorial.sim.sdf.elements import boolean, child_text, name_of, Notes, number
-from service_tutorial.sim.sdf.elements import numbers
+from service_tutorial.sim.sdf.elements import first_child, numbers
 from service_tutorial.sim.sdf.links import LinkReader
 from service_tutorial.sim.sdf.paths import built_in, MODEL_CONFIG, model_file
 from service_tutorial.sim.sdf.paths import NEWEST_VERSION, parse_version
@@ -148,7 +148,7 @@ class SdfReading:
             tag = child.tag if isinstance(child.tag, str) else ''
             if tag in ('link', 'joint', 'frame'):
                 child_name = name_of(child, shown)
-                pose, relative_to = read_pose(child.find('pose'), version,
+                pose, relative_to = read_pose(first_child(child, 'pose'), version,
                                               f'{tag} {quoted(child_name)} of {shown}')
                 attached_to = child.get('attached_to', '') if tag == 'frame' else \
                     (child_text(child, 'child') or '') if tag == 'joint' else ''
@@ -202,7 +202,7 @@ class SdfReading:
         (the model's @placement_frame, an include's <placement_frame>) is what that pose
         places, from SDF 1.8.
         """
-        pose_element = element.find('pose') if pose_element is None else pose_element
+        pose_element = first_child(element, 'pose') if pose_element is None else pose_element
         pose, relative_to = read_pose(pose_element, version, asker)
         placement = element.get('placement_frame') or child_text(element, 'placement_frame')
         if placement and version >= (1, 8):
@@ -263,7 +263,7 @@ class SdfReading:
                                depth=depth, scope=scope)
         finally:
             self._stack.pop()
-        own_pose = element.find('pose')
+        own_pose = first_child(element, 'pose')
         if own_pose is None:  # the model's own pose, with no frame of the including scope
             pose, _ = self.placed(found[0], model, file_version, what)
             return model, pose, ''
@@ -341,7 +341,7 @@ class SdfReading:
         if ends[0] == ends[1]:
             raise DescriptionError(f'{what} joins link {quoted(ends[0])} to itself')
         pose = graph.pose(name, what)
-        axes = tuple(self._axis(element.find(tag), tag, graph, pose, version, what)
+        axes = tuple(self._axis(first_child(element, tag), tag, graph, pose, version, what)
                      for tag in AXES.get(kind, ()))
         return Joint(name=name, kind=kind, parent=ends[0], child=ends[1], pose=pose, axes=axes)
 
@@ -351,7 +351,7 @@ class SdfReading:
         if element is None:
             element = etree.Element(tag)  # SDF's defaults: 0 0 1, no limits
         self.notes.children(element, 'axis', shown)
-        xyz_element = element.find('xyz')
+        xyz_element = first_child(element, 'xyz')
         xyz = np.array(numbers(child_text(element, 'xyz') or '0 0 1', 3, f'{shown} <xyz>'))
         if not np.linalg.norm(xyz) > 1e-9:
             raise DescriptionError(f'{shown} <xyz> is zero')
@@ -363,7 +363,7 @@ class SdfReading:
             frame = graph.pose(xyz_element.get('expressed_in'), shown)
         direction = frames.rotate(frame[1], xyz / np.linalg.norm(xyz))
         fields = {}
-        limit = element.find('limit')
+        limit = first_child(element, 'limit')
         if limit is not None:
             self.notes.children(limit, 'limit', shown)
             fields['lower'] = number(limit, 'lower', -np.inf, f'{shown} <limit>', infinite=True)
@@ -373,7 +373,7 @@ class SdfReading:
             velocity = number(limit, 'velocity', np.inf, f'{shown} <limit>', infinite=True)
             if 0.0 <= velocity < NO_LIMIT:
                 self.notes.add('<limit><velocity>', shown)
-        dynamics = element.find('dynamics')
+        dynamics = first_child(element, 'dynamics')
         if dynamics is not None:
             self.notes.children(dynamics, 'dynamics', shown)
             for key in ('damping', 'friction', 'spring_stiffness'):
