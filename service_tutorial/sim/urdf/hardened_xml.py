@@ -62,17 +62,17 @@ def check_structure(root):
     """Refuse the structural faults yourdfpy would report with a bare KeyError."""
     if not root.get('name'):
         raise UrdfError('model_xml is not valid URDF: <robot> has no name attribute')
-    links = root.findall('link')
+    links = list(root.iterchildren('link'))
     if not links:
         raise UrdfError('model_xml has no <link>')
     link_names = set()
     for link in links:
         _new_name(link, link_names)
     joint_names = set()
-    for joint in root.findall('joint'):
+    for joint in root.iterchildren('joint'):
         name = _new_name(joint, joint_names)
         for end in ('parent', 'child'):
-            element = joint.find(end)
+            element = next(joint.iterchildren(end), None)
             if element is None or not element.get('link'):
                 raise UrdfError(f"joint '{name}' has no <{end} link=...>")
         kind = joint.get('type')

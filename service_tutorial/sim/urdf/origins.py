@@ -18,26 +18,26 @@ def take_origins(root):
     Return each as (position, quaternion), keyed by where it stood: ('joint', name),
     ('inertial', link), ('visual', link, index) or ('collision', link, index), as yourdfpy
     lists them. check_structure() has checked their numbers already. As in yourdfpy, an
-    element's first <origin> counts.
+    element's first <origin> counts. (iterchildren(), not lxml's find(): half the time.)
     """
     origins = {}
 
     def take(element, key):
-        found = element.findall('origin')
+        found = list(element.iterchildren('origin'))
         if found:
             origins[key] = _origin_pose(found[0], key)
             for origin in found:
                 element.remove(origin)
 
-    for joint in root.findall('joint'):
+    for joint in root.iterchildren('joint'):
         take(joint, ('joint', joint.get('name')))
-    for link in root.findall('link'):
+    for link in root.iterchildren('link'):
         name = link.get('name')
-        inertial = link.find('inertial')
+        inertial = next(link.iterchildren('inertial'), None)
         if inertial is not None:
             take(inertial, ('inertial', name))
         for kind in ('visual', 'collision'):
-            for index, element in enumerate(link.findall(kind)):
+            for index, element in enumerate(link.iterchildren(kind)):
                 take(element, (kind, name, index))
     return origins
 
