@@ -184,7 +184,8 @@ class World:
         for model in spawned:
             model.reset_plugins()
         spawning.log_spawned(self._logger, spawned)
-        self.schedule_events()
+        # Only the new plugins can bring the next event closer: no pass over the whole fleet.
+        self.schedule_event(plugins.next_event(spawned))
         return outcomes
 
     def _attach(self, batch):
@@ -224,9 +225,9 @@ class World:
         except attachment.CompileError:
             self.rebuild(self._models)
             return
-        # The models spawned after it moved up in MuJoCo's arrays; the others stayed.
+        # The models spawned after it moved up in MuJoCo's arrays; the others stayed. The
+        # next event stays: were it the deleted model's, one update() finds nothing due.
         self._after_recompile([self._models[later] for later in names[names.index(name) + 1:]])
-        self.schedule_events()
         self.forward()
         self._logger.info("deleted model '%s'", name)
 
