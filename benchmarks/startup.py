@@ -60,7 +60,8 @@ def startup_table(observer, config):
     table.note = ('CPU s: CPU time the world process had used when ready; node imports: wall '
                   'time of a fresh interpreter importing service_tutorial.world_node.node '
                   '(rclpy, MuJoCo, the messages); yourdfpy import: the same for yourdfpy, '
-                  'which brings trimesh and scipy, and which the world imports when it reads '
+                  'which brings trimesh (and whatever of its extras is installed: scripts/setup '
+                  'leaves them out), and which the world imports when it reads '
                   "its first URDF (the start-up world's); both are parts of any start-up")
     return table
 

@@ -306,15 +306,18 @@ class DiffDrive(Plugin):
         data.act[self._act_adr] = 0.0
         data.ctrl[self._actuator_ids] = 0.0
         qpos = data.qpos
-        self.encoder.reset(*(qpos[address] for address in self._wheel_qpos_adr))
+        self.encoder.reset(*(qpos.item(address) for address in self._wheel_qpos_adr))
         base = self.world.body_state(self._base_body_id)
         self.origin_position = base.position
         self.origin_orientation = base.orientation
 
     def integrate_encoders(self):
         """Add the wheel turns since the last call to encoder odometry, whoever reads it."""
+        # As Python floats (item()): numpy's scalars would make each step of the arc slower,
+        # for every robot at every odometry turn.
         qpos = self.world.data.qpos
-        self.encoder.update(*(qpos[address] for address in self._wheel_qpos_adr))
+        left, right = self._wheel_qpos_adr
+        self.encoder.update(qpos.item(left), qpos.item(right))
 
     def odometry(self):
         """Return the robot's odometry, from its first pair's encoders or from ground truth."""
@@ -322,7 +325,8 @@ class DiffDrive(Plugin):
         if config.odometry_source == ODOMETRY_SOURCE_ENCODER:
             self.integrate_encoders()
             qvel = self.world.data.qvel
-            return self.encoder.odometry(*(qvel[address] for address in self._wheel_dof_adr),
+            left, right = self._wheel_dof_adr
+            return self.encoder.odometry(qvel.item(left), qvel.item(right),
                                          config.odometry_frame, config.robot_base_frame)
         base = self.world.body_state(self._base_body_id)
         position, orientation = frames.relative(self.origin_position, self.origin_orientation,

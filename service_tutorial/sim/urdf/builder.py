@@ -88,8 +88,9 @@ def load_urdf(model_xml, *, base_dir=None, package_resolver=None, timestep=0.002
     for element in [element for element in root.iter('*') if element.tag[0] == '{']:
         element.getparent().remove(element)
     origins = take_origins(root)
-    # yourdfpy brings trimesh and scipy, about a second of CPU: imported by the first URDF
-    # built, so that a program that only reads robot files (the lesson's clients) starts without.
+    # yourdfpy brings trimesh, a quarter of a second (a second with trimesh's extras, SciPy
+    # and networkx, installed): imported by the first URDF built, so that a program that only
+    # reads robot files (the lesson's clients) starts without.
     import yourdfpy
     try:
         urdf = yourdfpy.URDF.load(
