@@ -60,6 +60,16 @@ def integrate_arc(x, y, yaw, distance, turn):
             new_yaw)
 
 
+def wheel_values(array, addresses):
+    """
+    Return the entries of an MjData array (qpos, qvel) at the wheels' addresses, as floats.
+
+    Python floats (item()): numpy's scalars would make each step of the encoders' arc slower,
+    for every robot at every odometry turn.
+    """
+    return [array.item(address) for address in addresses]
+
+
 class EncoderOdometry:
     """Dead reckoning of a planar pose from the angles of the two wheels."""
 
@@ -305,28 +315,22 @@ class DiffDrive(Plugin):
         self.commanded_at = None
         data.act[self._act_adr] = 0.0
         data.ctrl[self._actuator_ids] = 0.0
-        qpos = data.qpos
-        self.encoder.reset(*(qpos.item(address) for address in self._wheel_qpos_adr))
+        self.encoder.reset(*wheel_values(data.qpos, self._wheel_qpos_adr))
         base = self.world.body_state(self._base_body_id)
         self.origin_position = base.position
         self.origin_orientation = base.orientation
 
     def integrate_encoders(self):
         """Add the wheel turns since the last call to encoder odometry, whoever reads it."""
-        # As Python floats (item()): numpy's scalars would make each step of the arc slower,
-        # for every robot at every odometry turn.
-        qpos = self.world.data.qpos
-        left, right = self._wheel_qpos_adr
-        self.encoder.update(qpos.item(left), qpos.item(right))
+        self.encoder.update(*wheel_values(self.world.data.qpos, self._wheel_qpos_adr))
 
     def odometry(self):
         """Return the robot's odometry, from its first pair's encoders or from ground truth."""
         config = self.config
         if config.odometry_source == ODOMETRY_SOURCE_ENCODER:
             self.integrate_encoders()
-            qvel = self.world.data.qvel
-            left, right = self._wheel_dof_adr
-            return self.encoder.odometry(qvel.item(left), qvel.item(right),
+            return self.encoder.odometry(*wheel_values(self.world.data.qvel,
+                                                       self._wheel_dof_adr),
                                          config.odometry_frame, config.robot_base_frame)
         base = self.world.body_state(self._base_body_id)
         position, orientation = frames.relative(self.origin_position, self.origin_orientation,

@@ -26,7 +26,7 @@ from service_tutorial.sim.plugins import gz_names
 from service_tutorial.sim.plugins import Plugin
 from service_tutorial.sim.plugins.diff_drive import add_wheel_servos
 from service_tutorial.sim.plugins.diff_drive import drive_actuator_name, EncoderOdometry
-from service_tutorial.sim.plugins.diff_drive import MAX_WHEEL_RIM_SPEED
+from service_tutorial.sim.plugins.diff_drive import MAX_WHEEL_RIM_SPEED, wheel_values
 from service_tutorial.sim.plugins.gz_parameters import GzParameters
 from service_tutorial.sim.plugins.speed_limits import KINDS, read_limits, SpeedLimits
 from service_tutorial.sim.validation import quoted
@@ -265,19 +265,17 @@ class GzDiffDrive(Plugin):
         self._ramps, self._history = (), ((0.0, 0.0), (0.0, 0.0))
         self._next_change = math.inf
         self._set_wheels((0.0, 0.0), (0.0, 0.0))
-        self.encoder.reset(*(self.world.data.qpos[address] for address in self._wheel_qpos_adr))
+        self.encoder.reset(*wheel_values(self.world.data.qpos, self._wheel_qpos_adr))
         self._next_odometry = self.world.time + self.odometry_period
 
     def integrate_encoders(self):
         """Add the first wheels' turns since the last call to the odometry."""
-        qpos = self.world.data.qpos
-        self.encoder.update(*(qpos[address] for address in self._wheel_qpos_adr))
+        self.encoder.update(*wheel_values(self.world.data.qpos, self._wheel_qpos_adr))
 
     def odometry(self):
         """Return the wheel odometry: planar pose from spawn, twist in the base frame."""
         self.integrate_encoders()
-        qvel = self.world.data.qvel
-        return self.encoder.odometry(*(qvel[address] for address in self._wheel_dof_adr),
+        return self.encoder.odometry(*wheel_values(self.world.data.qvel, self._wheel_dof_adr),
                                      self.odometry_frame, self.base_frame)
 
 
