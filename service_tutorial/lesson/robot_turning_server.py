@@ -5,9 +5,11 @@ The lesson's turning service: turn tinybot at a given rate for a given time.
 cmd_vel for time_duration seconds of ROS time (simulation time with use_sim_time), then a
 zero Twist, and answers success. Unlike the ROS 1 original, which busy-looped inside its
 callback, the node never blocks its executor: the service callback is a coroutine that queues
-the turn and awaits its end, while two timers carry the turn out. Requests that arrive during a
-turn wait for the turns before them (first come, first served). A zero-length turn stops the
-robot and succeeds at once when its turn comes.
+the turn and awaits its end, while two timers carry the turn out. On simulation time a turn
+starts with the next /clock message, as it stops with one, so that the world sees both at the
+same point of its stepping. Requests that arrive during a turn wait for the turns before them
+(first come, first served). A zero-length turn stops the robot and succeeds at once when its
+turn comes.
 """
 
 from collections import deque
@@ -64,14 +66,15 @@ class RobotTurningServer(Node):
         self.publish_timer = self.create_timer(
             1.0 / self.publish_rate, self.publish_callback, autostart=False)
         self.stop_timer = self.create_timer(1.0, self.stop_callback, autostart=False)
-        # Time going back ends the turn under way (see the module's docstring). rclpy calls
-        # time_jumped from its TimeSource's /clock subscription, right after the new time is
-        # set: an executor callback in this node's default group, the timers' group, so it
-        # never runs beside them. The handle is kept: dropping it would remove the callback.
+        # Each new simulation time starts a turn waiting for it, and time going back ends the
+        # turn under way (time_moved). rclpy calls it from its TimeSource's /clock
+        # subscription, right after the new time is set: an executor callback in this node's
+        # default group, the timers' group, so it never runs beside them. The handle is kept:
+        # dropping it would remove the callback.
         self.time_jump_handle = self.get_clock().create_jump_callback(
-            JumpThreshold(min_forward=None, min_backward=Duration(nanoseconds=-1),
-                          on_clock_change=False),
-            post_callback=self.time_jumped)
+            JumpThreshold(min_forward=Duration(nanoseconds=1),
+                          min_backward=Duration(nanoseconds=-1), on_clock_change=False),
+            post_callback=self.time_moved)
         self.get_logger().info('==== Robot Turning Server Started ====')
 
     async def control_robot_angle_callback(self, request, response):
@@ -107,15 +110,21 @@ class RobotTurningServer(Node):
         return None
 
     def start_turn(self, turn):
-        """Publish the turn's command now and schedule its stop exactly time_duration later."""
+        """Start the turn now, or on simulation time with the next /clock (time_moved)."""
         if turn.time_duration == 0:
             self.finish_turn()
             return
         self.publish_timer.reset()
+        if not self.get_clock().ros_time_is_active:
+            self.begin_turn(turn)
+        # On simulation time the stop goes out right after the /clock message that ends the
+        # turn, when the world has just stepped. A start sent at once, on the time of the last
+        # /clock, could reach the world after its next steps had begun: the robot would turn
+        # from a tick later than the server counts, and stop on time, short of the angle.
+
+    def begin_turn(self, turn):
+        """Publish the turn's command and schedule its stop exactly time_duration later."""
         now = self.get_clock().now()
-        if now.nanoseconds == 0:
-            # Simulation time has not arrived on /clock yet: start on the first timer tick.
-            return
         if self.cmd_vel_pub.get_subscription_count() == 0 and \
                 turn.ticks_without_listener < self.publish_rate:
             # Nobody listens on cmd_vel yet (discovery takes a moment): a command sent now
@@ -135,7 +144,7 @@ class RobotTurningServer(Node):
             return
         turn = self.turns[0]
         if turn.start is None:
-            self.start_turn(turn)
+            self.begin_turn(turn)
         else:
             self.cmd_vel_pub.publish(turn.command)
 
@@ -146,9 +155,15 @@ class RobotTurningServer(Node):
         self.get_logger().info(f'Done ... after {elapsed:.3f} s')
         self.finish_turn()
 
-    def time_jumped(self, jump):
-        """End the turn under way when simulation time went back: it cannot be timed now."""
-        if jump.delta.nanoseconds >= 0 or not self.turns or self.turns[0].start is None:
+    def time_moved(self, jump):
+        """Begin a turn waiting for simulation time; end the turn under way if time went back."""
+        if not self.turns:
+            return
+        if jump.delta.nanoseconds > 0:
+            if self.turns[0].start is None:
+                self.begin_turn(self.turns[0])
+            return
+        if self.turns[0].start is None:
             return
         turn = self.turns[0]
         before_jump = self.get_clock().now().nanoseconds - jump.delta.nanoseconds

@@ -7,6 +7,8 @@ import pytest
 from rcl_interfaces.srv import GetParameters
 from rclpy.node import Node
 from rclpy.parameter import Parameter
+from rclpy.time import Time
+from rosgraph_msgs.msg import Clock
 from service_tutorial.conversions import yaw_of
 from service_tutorial.lesson.robot_turning_server import RobotTurningServer
 from service_tutorial.testing.simulated_world import SimulatedWorld
@@ -104,6 +106,42 @@ def test_two_seconds_at_half_a_radian_per_second_turn_tinybot_one_radian(turning
     commands = turning_world.commands()
     assert commands[-1] == 0.0
     assert 38 <= commands.count(0.5) <= 42
+
+
+def test_on_simulation_time_a_turn_counts_from_the_clock_message_that_started_it(ros, capfd):
+    # A world takes commands at its ticks and says the time after stepping. The stop goes out
+    # right after a /clock message; the start must too, or a start sent on the time of the
+    # last message can reach the world after its next steps began, and the turn comes short.
+    server = ros.add_node(RobotTurningServer(
+        parameter_overrides=[Parameter('use_sim_time', value=True)]))
+    clock = ros.client_node.create_publisher(Clock, '/clock', 10)
+    cmd_vel = ros.subscribe(Twist, '/cmd_vel')
+    turning_cli = ros.client_node.create_client(ControlTurningMessage, '/control_robot_angle')
+    assert turning_cli.wait_for_service(timeout_sec=10.0)
+    assert ros.wait_for(lambda: server.cmd_vel_pub.get_subscription_count() > 0)
+
+    def tell_time(seconds):
+        nanoseconds = round(seconds * 1e9)
+
+        def heard():  # said again until heard: /clock is best effort
+            clock.publish(Clock(clock=Time(nanoseconds=nanoseconds).to_msg()))
+            return server.get_clock().now().nanoseconds == nanoseconds
+        assert ros.wait_for(heard), f'the server did not hear /clock {seconds}'
+
+    tell_time(5.0)
+    answer = turning_cli.call_async(turning_request(1, 0.5))
+    assert ros.wait_for(lambda: server.turns), 'the request was not queued'
+    assert server.turns[0].start is None
+    tell_time(5.25)
+    assert ros.wait_for(lambda: 0.5 in [msg.angular.z for msg in cmd_vel])
+    tell_time(6.2)
+    tell_time(6.25)
+
+    assert ros.wait_for(answer.done)
+    assert answer.result().success
+    assert ros.wait_for(lambda: cmd_vel[-1] == Twist())
+    log = capfd.readouterr().err
+    assert 'Done ... after 1.000 s' in log, log
 
 
 @pytest.mark.parametrize('time_duration, angular_vel', [(1, 0.1), (1, 1.5), (5, -0.5)])
