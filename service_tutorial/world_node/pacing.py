@@ -10,7 +10,10 @@ time (real_time_factor above 0) a tick steps as far as the wall clock says, in c
 where a stream that carries the world's state (odometry, joint states) falls due. /clock only
 tells the time, so it does not end chunks (TIME_ONLY_STREAMS): each of its turns that a chunk
 stepped past goes out after the chunk, stamped with the step at its turn. A chunk of 2 steps
-per /clock message cost more than the steps. Free-running (real_time_factor 0) a tick steps for
+per /clock message cost more than the steps. A real-time tick as long as a stream's period
+ends at the last turn of a stream of state (_to_last_turn): the world lags the wall clock by up
+to MAX_TICK_SIMULATED more, and its ticks end at the same steps however early or late the wall
+clock's ticks come. Free-running (real_time_factor 0) a tick steps for
 a budget of wall time, and each stream is also held to its rate in wall time: far faster than
 real time, the simulated rates would cost more than the physics. The streams of state end
 chunks at their turns in wall time, /clock goes out after the first chunk past its turn. What a
@@ -276,6 +279,7 @@ class Pacer:
             behind = int(MAX_LAG / self.timestep)
             # Go on from where this tick ends, as if the wall clock had waited for it.
             self.anchor(sim_time() + behind * self.timestep)
+        behind = self._to_last_turn(sim_time(), behind)
         # However far behind, a tick steps for MAX_STEP_BUDGET of wall time at most, so that
         # calls are answered between two ticks even when steps are slow (lasers cast at every
         # step): the world then runs slower than real time, as it does when it cannot keep up.
@@ -290,6 +294,34 @@ class Pacer:
             yield steps
             behind -= steps
             self._learn_step_cost(steps, self._wall_clock() - start)
+
+    def _to_last_turn(self, now, steps):
+        """
+        Return the steps of a real-time tick of steps: to the last turn of a stream of state.
+
+        A tick about as long as a stream's period or longer ends where one of the streams of
+        state falls due, the rest waiting for the next tick if it is MAX_TICK_SIMULATED at
+        most; a tick that would end a step short of a turn takes that step too. Ticks then
+        take one chunk each, not a chunk to the turn and one past it, and end at the same
+        steps whether the wall clock ticks a little early or late: a command taken at a tick
+        takes effect as long after the /clock message it was sent on, whichever tick it is.
+        """
+        last = None
+        for name in self._state_streams:
+            # A stream due now goes out after the first step (a chunk takes one at least).
+            turn = max(self._next_sim[name], now + self.timestep)
+            period = self._periods[name]
+            if (steps + 1) * self.timestep < period - 0.5 * self.timestep:
+                continue  # a short tick: it steps as far as the wall clock went
+            within = math.floor(((now + (steps + 0.5) * self.timestep) - turn) / period)
+            if within < 0:  # no turn within: step to the first if it is one step past
+                within = 0 if turn <= now + (steps + 1.5) * self.timestep else None
+            if within is not None:
+                turn_steps = round((turn + within * period - now) / self.timestep)
+                last = turn_steps if last is None else max(last, turn_steps)
+        if last is None or (steps - last) * self.timestep > MAX_TICK_SIMULATED + 1e-9:
+            return steps
+        return last
 
     def requested_chunks(self, count, sim_time, other_due=lambda: math.inf):
         """
