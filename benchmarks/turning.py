@@ -112,8 +112,9 @@ def turning_tables(observer, config):
                       'free-running)', list(columns))
         for factor in config.turning_check_rtfs:
             check.rows += run_turns(observer, factor, [config.turning_check_point])
-        check.note = ('the turning server stops the robot on a /clock-driven timer; the '
-                      'world runs on while the stop travels, so the error grows with the '
-                      'factor')
+        check.note = ('the turning server starts and stops the robot right after a /clock '
+                      'message; the world takes commands at its ticks, which end where '
+                      'odometry falls due, so a turn lasts what the server counted at any '
+                      'factor; free-running, the world runs on while a command travels')
         tables.append(check)
     return tables
