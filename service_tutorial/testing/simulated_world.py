@@ -31,6 +31,7 @@ from service_tutorial.conversions import make_pose, NANOSECONDS
 from service_tutorial.testing.isolation import claim_ros_domain, localhost_discovery
 from service_tutorial.testing.settling_executor import SettlingExecutor
 from service_tutorial.testing.settling_executor import StoppableExecutor
+from service_tutorial.world_node.pacing import PAUSED_TICK_PERIOD
 from service_tutorial.world_node.subscribers import SUBSCRIBER_CHECK_PERIOD
 from simulation_interfaces.msg import EntityFilters, EntityState, Result, SimulationState
 from simulation_interfaces.srv import DeleteEntity, GetEntities, GetEntityState
@@ -196,15 +197,18 @@ class SimulatedWorld:
         A publisher learns of a subscription a moment after the graph shows it, and the world
         asks whether anyone listens to a topic once per SUBSCRIBER_CHECK_PERIOD of wall time:
         a new subscriber to one of the world's topics waits that long, once, and its first
-        message comes with the first steps after it.
+        message comes with the first steps after it. A sensor switches on when the world looks
+        at its watch after that: at the paused world's next tick (PAUSED_TICK_PERIOD apart) at
+        least FACE_LOOK_PERIOD after its last look, so the wait is that much longer.
         """
+        from service_tutorial.world_node.node import FACE_LOOK_PERIOD
         assert self.wait_for(lambda: not self._unmatched_publishers(), timeout=CALL_TIMEOUT), \
             'publishers that still miss subscribers: ' + ', '.join(
                 sorted({publisher.topic_name for publisher in self._unmatched_publishers()}))
         counts = {publisher.topic_name: publisher.get_subscription_count()
                   for publisher in self.world_node.publishers}
         if any(count > self._heard_subscribers.get(topic, 0) for topic, count in counts.items()):
-            time.sleep(SUBSCRIBER_CHECK_PERIOD)
+            time.sleep(SUBSCRIBER_CHECK_PERIOD + PAUSED_TICK_PERIOD + FACE_LOOK_PERIOD)
         self._heard_subscribers = counts
 
     def _wait_until_sent_messages_are_received(self):
