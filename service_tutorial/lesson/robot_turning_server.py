@@ -160,7 +160,8 @@ class RobotTurningServer(Node):
         if not self.turns:
             return
         if jump.delta.nanoseconds > 0:
-            if self.turns[0].start is None:
+            # Tried once: while nobody listens on cmd_vel, the publish timer tries again.
+            if self.turns[0].start is None and self.turns[0].ticks_without_listener == 0:
                 self.begin_turn(self.turns[0])
             return
         if self.turns[0].start is None:

@@ -108,17 +108,9 @@ def test_two_seconds_at_half_a_radian_per_second_turn_tinybot_one_radian(turning
     assert 38 <= commands.count(0.5) <= 42
 
 
-def test_on_simulation_time_a_turn_counts_from_the_clock_message_that_started_it(ros, capfd):
-    # A world takes commands at its ticks and says the time after stepping. The stop goes out
-    # right after a /clock message; the start must too, or a start sent on the time of the
-    # last message can reach the world after its next steps began, and the turn comes short.
-    server = ros.add_node(RobotTurningServer(
-        parameter_overrides=[Parameter('use_sim_time', value=True)]))
+def clock_teller(ros, server):
+    """Return tell_time(seconds): publish /clock until the server's clock shows it."""
     clock = ros.client_node.create_publisher(Clock, '/clock', 10)
-    cmd_vel = ros.subscribe(Twist, '/cmd_vel')
-    turning_cli = ros.client_node.create_client(ControlTurningMessage, '/control_robot_angle')
-    assert turning_cli.wait_for_service(timeout_sec=10.0)
-    assert ros.wait_for(lambda: server.cmd_vel_pub.get_subscription_count() > 0)
 
     def tell_time(seconds):
         nanoseconds = round(seconds * 1e9)
@@ -127,6 +119,20 @@ def test_on_simulation_time_a_turn_counts_from_the_clock_message_that_started_it
             clock.publish(Clock(clock=Time(nanoseconds=nanoseconds).to_msg()))
             return server.get_clock().now().nanoseconds == nanoseconds
         assert ros.wait_for(heard), f'the server did not hear /clock {seconds}'
+    return tell_time
+
+
+def test_on_simulation_time_a_turn_counts_from_the_clock_message_that_started_it(ros, capfd):
+    # A world takes commands at its ticks and says the time after stepping. The stop goes out
+    # right after a /clock message; the start must too, or a start sent on the time of the
+    # last message can reach the world after its next steps began, and the turn comes short.
+    server = ros.add_node(RobotTurningServer(
+        parameter_overrides=[Parameter('use_sim_time', value=True)]))
+    tell_time = clock_teller(ros, server)
+    cmd_vel = ros.subscribe(Twist, '/cmd_vel')
+    turning_cli = ros.client_node.create_client(ControlTurningMessage, '/control_robot_angle')
+    assert turning_cli.wait_for_service(timeout_sec=10.0)
+    assert ros.wait_for(lambda: server.cmd_vel_pub.get_subscription_count() > 0)
 
     tell_time(5.0)
     answer = turning_cli.call_async(turning_request(1, 0.5))
@@ -142,6 +148,30 @@ def test_on_simulation_time_a_turn_counts_from_the_clock_message_that_started_it
     assert ros.wait_for(lambda: cmd_vel[-1] == Twist())
     log = capfd.readouterr().err
     assert 'Done ... after 1.000 s' in log, log
+
+
+def test_on_simulation_time_a_turn_waits_a_second_for_a_cmd_vel_listener(ros):
+    server = ros.add_node(RobotTurningServer(
+        parameter_overrides=[Parameter('use_sim_time', value=True)]))
+    tell_time = clock_teller(ros, server)
+    turning_cli = ros.client_node.create_client(ControlTurningMessage, '/control_robot_angle')
+    assert turning_cli.wait_for_service(timeout_sec=10.0)
+    tell_time(1.0)
+    answer = turning_cli.call_async(turning_request(1, 0.5))
+    assert ros.wait_for(lambda: server.turns), 'the request was not queued'
+
+    # /clock at 250 Hz for 0.4 s, and nobody on cmd_vel: the command would be lost.
+    for tick in range(1, 101):
+        tell_time(1.0 + 0.004 * tick)
+    assert server.turns[0].start is None, 'the turn began with nobody listening'
+    cmd_vel = ros.subscribe(Twist, '/cmd_vel')
+    assert ros.wait_for(lambda: server.cmd_vel_pub.get_subscription_count() > 0)
+    tell_time(1.45)
+    tell_time(1.5)  # the publish timer's next tick, 50 ms of simulation time apart
+
+    assert ros.wait_for(lambda: 0.5 in [msg.angular.z for msg in cmd_vel])
+    tell_time(2.5)
+    assert ros.wait_for(answer.done) and answer.result().success
 
 
 @pytest.mark.parametrize('time_duration, angular_vel', [(1, 0.1), (1, 1.5), (5, -0.5)])
