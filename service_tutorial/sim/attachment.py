@@ -23,6 +23,10 @@ GROUP_SIZE = 5
 # group goes without a prefix of its own, since its models' elements carry theirs; an XML file
 # saved of the spec might not load, and the world never saves one.
 EMPTY_PREFIX_WARNING = 'Attaching a spec with an empty prefix'
+# MuJoCo 4 carries every element's whole state through a recompile, a deleted model's share
+# left out; older versions carry positions, velocities and controls only, and the world
+# carries the rest (warm starts, applied forces, activations) itself.
+RECOMPILE_KEEPS_STATE = int(mujoco.__version__.split('.')[0]) >= 4
 
 
 class CompileError(RuntimeError):
@@ -69,20 +73,19 @@ def attach(spec, mj_model, data, models):
         attach_all(spec, models)
     except Exception as error:  # the world builds its spec afresh, as for a failed compile
         raise CompileError(compile_error(error)) from None
-    kept = {field: getattr(data, field).copy() for field in STATE_FIELDS}
+    kept = {} if RECOMPILE_KEEPS_STATE else {
+        field: getattr(data, field).copy() for field in STATE_FIELDS}
     return _recompile(spec, mj_model, data, kept)
 
 
 def detach(spec, mj_model, data, model):
     """Detach a model from the live spec; return the recompiled MjModel and MjData."""
-    kept = model.state_without(data)
+    kept = {} if RECOMPILE_KEEPS_STATE else model.state_without(data)
     model.detach(spec)
     return _recompile(spec, mj_model, data, kept)
 
 
 def _recompile(spec, mj_model, data, kept):
-    # MuJoCo 4 carries the whole state over itself; older versions carry positions,
-    # velocities and controls only.
     try:
         with _quiet_about_groups():
             mj_model, data = spec.recompile(mj_model, data)
