@@ -88,26 +88,29 @@ def vector(values, size, what):
         raise WorldError(f'{what} is not a vector of {size} numbers: {values!r}') from None
     if array.shape != (size,):
         raise WorldError(f'{what} must have {size} elements, not {array.size}')
-    if not np.isfinite(array).all():
+    # The checks of a few numbers go on Python floats: a NumPy call each costs several times
+    # as much, and every spawn and state a client sets is checked.
+    if not all(map(math.isfinite, array.tolist())):
         raise WorldError(f'{what} contains NaN or infinity: {array.tolist()}')
     return array
 
 
 def unit_quaternion(values, what='orientation'):
     """Return a (w, x, y, z) quaternion scaled to unit length; refuse a zero one."""
-    quaternion = vector(values, 4, what)
-    largest = np.abs(quaternion).max()
+    components = vector(values, 4, what).tolist()
+    largest = max(map(abs, components))
     if largest == 0.0:
-        raise WorldError(f'{what} quaternion is zero: {quaternion.tolist()}')
+        raise WorldError(f'{what} quaternion is zero: {components}')
     # Scaled first, so that neither huge nor tiny components overflow or underflow the norm.
-    quaternion = quaternion / largest
-    return quaternion / np.linalg.norm(quaternion)
+    scaled = [component / largest for component in components]
+    norm = math.hypot(*scaled)
+    return np.array([component / norm for component in scaled])
 
 
 def position(values, what='position'):
     """Return a position of three finite numbers within HUGE_POSITION of the origin."""
     array = vector(values, 3, what)
-    if np.abs(array).max() >= HUGE_POSITION:
+    if max(map(abs, array.tolist())) >= HUGE_POSITION:
         raise WorldError(f'{what} must stay below {HUGE_POSITION:g} m in magnitude: '
                          f'{array.tolist()}')
     return array
