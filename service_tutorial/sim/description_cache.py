@@ -2,16 +2,15 @@
 The robots a world has built from their texts, kept so that the same text spawns again unbuilt.
 
 Building a robot (parsing, checks, yourdfpy, the spec builder) took most of a spawn; a fleet
-spawns one description many times. A description is kept under a digest of its text and the
-folder its meshes resolve from, and used again only while its mesh files (and the files an SDF
-model includes) are unchanged. A
-description with missing meshes is not kept: the files may turn up. Spawning never changes a
-description: the world's spec attaches a copy of it. Within one batch, a fleet's orders share
-one text: it is digested and its meshes checked once (for_batch()).
+spawns one description many times. A description is kept under its text and the folder its
+meshes resolve from, and used again only while its mesh files (and the files an SDF model
+includes) are unchanged. A description with missing meshes is not kept: the files may turn up.
+Spawning never changes a description: the world's spec attaches a copy of it. Within one
+batch, a fleet's orders share one text: it is looked up and its meshes checked once
+(for_batch()).
 """
 
 import collections
-import hashlib
 import os
 
 from service_tutorial.sim.description_formats import FORMATS
@@ -60,9 +59,9 @@ class DescriptionCache:
 
     def load(self, text, base_dir=None, model_format='urdf'):
         """Return the RobotDescription of a text in a format, or raise DescriptionError."""
-        data = text.encode() if isinstance(text, str) else bytes(text)
-        key = (hashlib.sha256(data).digest(), isinstance(text, str), _folder(base_dir),
-               model_format)
+        # The text itself is the key: Python hashes a str once and keeps the hash, and tells
+        # an equal text by comparing, where a digest of it cost a pass of SHA-256 every time.
+        key = (text if isinstance(text, str) else bytes(text), _folder(base_dir), model_format)
         kept = self._kept.pop(key, None)
         if kept is not None and _file_stamps(kept[0]) == kept[1]:
             self._kept[key] = kept

@@ -158,7 +158,7 @@ def test_the_cache_keeps_a_bounded_number_of_descriptions():
     assert isinstance(first[0].spec, mujoco.MjSpec)
 
 
-def test_a_batch_of_one_text_digests_it_and_checks_its_meshes_once(monkeypatch):
+def test_a_batch_of_one_text_looks_it_up_and_checks_its_meshes_once(monkeypatch):
     cache = DescriptionCache(None, 0.002)
     urdf = read_file(MESHBOT)
     folder = os.path.dirname(MESHBOT)
