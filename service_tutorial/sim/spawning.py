@@ -11,8 +11,6 @@ judged, once: its name, its pose and frame, its description; each refusal has it
 
 from dataclasses import dataclass
 
-import numpy as np
-
 from service_tutorial.sim import frames
 from service_tutorial.sim import validation
 from service_tutorial.sim.description_formats import FORMATS
@@ -94,7 +92,7 @@ def prepared_model(order, *, taken, batch, frame_state, descriptions):
 
 def log_spawned(logger, models):
     """Log where models were spawned (one line for a batch) and each note on their building."""
-    places = [f"'{model.name}' at {np.round(model.spawn_position, 4).tolist()}"
+    places = [f"'{model.name}' at {[round(value, 4) for value in model.spawn_position.tolist()]}"
               for model in models]
     if len(places) == 1:
         logger.info('spawned model %s', places[0])
