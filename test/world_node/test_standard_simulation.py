@@ -335,9 +335,9 @@ def test_a_driven_tinybot_moves_as_in_normal_stepping_with_its_odometry(paused_w
 
 @pytest.mark.parametrize('steps, named', [(0, '0'), (LONGEST, str(LONGEST))])
 def test_step_counts_of_0_and_too_many_are_refused_at_once(paused_world, steps, named):
-    started = time.monotonic()
+    # At once: before a single step. A world that took the count on would not answer within
+    # the call's timeout, and its time would have moved.
     result = step(paused_world, steps, timeout=5.0)
-    assert time.monotonic() - started < 1.0
     assert result.result == FAILED and named in result.error_message
     assert sim_time(paused_world) == 0.0
     assert state(paused_world) == PAUSED

@@ -148,7 +148,7 @@ class TestWebPage:
         assert web_world.ros.wait_for(lambda: web_world.page.scene.redraws > redraws), \
             'the page did not draw R2-D2'
         drawn = time.monotonic() - answered
-        time.sleep(1.5)  # R2-D2 falls from 1 m and lands
+        web_world.world.wait_sim(1.5)  # R2-D2 falls from 1 m and lands
         with_r2d2 = web_world.view_until(
             lambda view: changed_pixels(before, view) > 3000,
             f'more than 3000 pixels changed by R2-D2 (drawn after {drawn:.3f} s)')
