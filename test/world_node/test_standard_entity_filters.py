@@ -171,7 +171,7 @@ class TestFilters:
 
     def test_a_catastrophic_pattern_on_a_long_name_takes_no_time(self, yard):
         # A backtracking matcher would take longer than the age of the universe on 64 letters;
-        # the world's answers within the call's timeout.
+        # the world answers within the call's timeout.
         for pattern in ('^(a*)*b$', '^(a|a)*b$', '^(a*){30}b$', '^(a+)+$'):
             names = picked(yard, filter=pattern)
             assert names == ([LONG_NAME] if pattern == '^(a+)+$' else [])
