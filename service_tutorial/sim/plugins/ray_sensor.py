@@ -155,8 +155,8 @@ class RaySensor(Sensor):
     def read(self):
         """Cast the scan's rays from the sensor and turn the distances into ranges."""
         mj_model, data, config = self.world.model, self.world.data, self.config
-        np.matmul(self._directions, data.site_xmat[self.site_id].reshape(3, 3).T,
-                  out=self._world_directions)
+        mujoco.mju_mulMatMatT(self._world_directions, self._directions,
+                              data.site_xmat[self.site_id].reshape(3, 3))
         self._origin[:] = data.site_xpos[self.site_id]
         groups = mj_model.geom_group
         groups[self._own_geoms] = HIDDEN_GROUP
@@ -193,7 +193,9 @@ def scan_ranges(distances, geom_ids, config, random, noise):
         noise *= config.noise_stddev
         noise += config.noise_mean
         noise += distances
-        np.clip(noise, config.range_min, config.range_max, out=noise)
+        # np.clip's own Python costs a scan more than these two passes over it.
+        np.maximum(noise, config.range_min, out=noise)
+        np.minimum(noise, config.range_max, out=noise)
         np.copyto(distances, noise, where=np.isfinite(distances))
 
 
