@@ -171,12 +171,13 @@ def gz_sensor_table(config):
                   depth_camera_row(config)]
     table.note = ('lidars: CPU time of GzLidar.read() (the Classic RaySensor cast, REP 117 '
                   'and gz readings, noise) against mj_multiRay of the same rays on the same '
-                  f'model, best of 3 x {config.scan_repeats}. Depth camera: median wall time of '
-                  f'{config.camera_frames} frames of GzCamera.read() (snapshot, draw, depth '
-                  'buffer made distances along the axis, noise) against mjv_updateScene, '
-                  'mjr_render and one mjr_readPixels of colour and depth on a GL context of '
-                  'its own, at the same camera, clipping distances, buffer size, shadows and '
-                  'multisampling. Ratio at most the limit, as for the Classic sensors.')
+                  f'model, the medians of {config.scan_repeats} of each taken in turns. Depth '
+                  f'camera: median wall time of {config.camera_frames} frames of '
+                  'GzCamera.read() (snapshot, draw, depth buffer made distances along the '
+                  'axis, noise) against mjv_updateScene, mjr_render and one mjr_readPixels of '
+                  'colour and depth on a GL context of its own, at the same camera, clipping '
+                  'distances, buffer size, shadows and multisampling. Ratio at most the limit, '
+                  'as for the Classic sensors.')
     return table
 
 

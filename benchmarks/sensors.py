@@ -12,12 +12,21 @@ from report import median_ms, Table
 from service_tutorial.testing.spawns import spawn_robot
 
 
-def cpu_time_per_call(function, repeats):
-    """Return the CPU time of this thread one call of function took, in s."""
-    start = time.thread_time()
-    for _ in range(repeats):
-        function()
-    return (time.thread_time() - start) / repeats
+def cpu_times_in_turns(first, second, count):
+    """
+    Return the median CPU times of this thread of a call of first and of second, in s.
+
+    The two are called in turns, one call each, count times: this shared machine's speed
+    drifts by half within a second, and calls taken in turns see the same drift.
+    """
+    clock = time.thread_time_ns
+    times = np.zeros((count, 2))
+    for index in range(count):
+        for column, function in enumerate((first, second)):
+            start = clock()
+            function()
+            times[index, column] = clock() - start
+    return tuple(float(median) * 1e-9 for median in np.median(times, axis=0))
 
 
 def sensor_world(samples=360):
@@ -49,11 +58,8 @@ def ray_sensor_times(sensor, world, repeats):
     def bare():
         mujoco.mj_multiRay(model, data, origin, directions, RAY_GEOM_GROUPS, 1, -1, geom_ids,
                            distances, None, samples, sensor.config.range_max)
-    scans, rays = [], []
-    for _ in range(3):  # alternating, so both see the same load; the best of each
-        scans.append(cpu_time_per_call(sensor.read, repeats))
-        rays.append(cpu_time_per_call(bare, repeats))
-    return min(scans) * 1e6, min(rays) * 1e6
+    scan, ray = cpu_times_in_turns(sensor.read, bare, repeats)
+    return scan * 1e6, ray * 1e6
 
 
 def scan_row(samples, config):
@@ -132,12 +138,13 @@ def sensor_table(observer, config):
     table.rows = [scan_row(360, config), scan_row(720, config), camera_frame_row(config),
                   *laser_speed_rows(observer, config)]
     table.note = ('scans: CPU time of RaySensor.read() (cast, own geoms hidden, REP 117 '
-                  'ranges, noise) against mj_multiRay of the same rays on the same model, best '
-                  f'of 3 x {config.scan_repeats}; ratio at most the limit. Camera: median wall '
-                  f'time of {config.camera_frames} frames of CameraSensor.read() against '
-                  'update_scene() and render() of a bare mujoco.Renderer at the same camera; '
-                  'ratio at most the limit. Speed: mujoco_world driving tinybot (bot0) in the '
-                  'yard, free-running, with a subscriber to bot0/scan here against none, '
+                  'ranges, noise) against mj_multiRay of the same rays on the same model, the '
+                  f'medians of {config.scan_repeats} of each taken in turns; ratio at most the '
+                  f'limit. Camera: median wall time of {config.camera_frames} frames of '
+                  'CameraSensor.read() against update_scene() and render() of a bare '
+                  'mujoco.Renderer at the same camera; ratio at most the limit. Speed: '
+                  'mujoco_world driving tinybot (bot0) in the yard, free-running, with a '
+                  'subscriber to bot0/scan here against none, '
                   f'medians of {config.speed_rounds} alternating rounds of '
                   f'{config.speed_window} s; ratio at least the limit. Free-running, a '
                   'listened sensor is held to its rate in wall time too, like every stream; '

@@ -84,7 +84,7 @@ class Config:
     step_rounds: int = 5                   # World.step against bare mj_step, best of
     step_count: int = 1000                 # steps per round
     camera_window: float = 2.0             # wall s of streaming camera measured
-    scan_repeats: int = 300                # scans per timing of the laser rows
+    scan_repeats: int = 900                # scans of each kind in the laser rows
     camera_frames: int = 20                # frames per timing of the robot camera row
     standard_batch: int = 50               # tinybots of a SpawnEntities batch and its states
     standard_rounds: int = 5               # alternating rounds of the batch rows
