@@ -274,6 +274,7 @@ class MujocoWorld(Node):
         # Steps on request (paused) keep every turn: with another Python thread in the process
         # (a test's, the benchmark's client), a turn given up after each tick cost StepSimulation
         # a quarter of its speed.
+        self.world.release_replaced()
         self.collections.collect_if_due()
         pacer.end_tick(back_to_back=period_ns == 0 and not world.paused)
 

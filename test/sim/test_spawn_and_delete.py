@@ -2,6 +2,7 @@
 
 import os
 import shutil
+import weakref
 
 import mujoco
 import numpy as np
@@ -24,6 +25,19 @@ def contents(world):
     """Return the sizes and element names of a world's compiled model."""
     model = world.model
     return {size: getattr(model, size) for size in SIZES}, bytes(model.names)
+
+
+def test_the_mujoco_model_and_data_a_recompile_replaced_live_until_released():
+    world = World()
+    for change in (lambda: spawn_file(world, 'tinybot', TINYBOT),
+                   lambda: world.delete_model('tinybot')):
+        replaced = weakref.ref(world.model), weakref.ref(world.data)
+        change()
+        assert world.model is not replaced[0]() and world.data is not replaced[1]()
+        assert all(ref() is not None for ref in replaced)
+        world.release_replaced()
+        assert all(ref() is None for ref in replaced)  # nothing else holds them
+    world.release_replaced()  # nothing left to release
 
 
 @pytest.mark.parametrize('path', [TINYBOT, R2D2, MESHBOT])

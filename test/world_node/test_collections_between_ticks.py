@@ -1,6 +1,9 @@
 """
 Full garbage collections stay out of the world's service calls (collections_between_ticks.py).
 
+So does freeing the MuJoCo model and data a spawn or a delete replaced (World.release_replaced):
+a weakref.finalize tells where each is freed.
+
 The process's full collections are watched through gc.callbacks, which tell where each one
 starts: inside a service callback of the world, or in its tick. Before every call the test makes
 a full collection due (the count of generation 2 past its threshold), as a long run of calls
@@ -9,6 +12,7 @@ does sooner or later.
 
 import gc
 import sys
+import weakref
 
 from repository import read_model
 from service_tutorial.world_node import pacing
@@ -81,3 +85,18 @@ def test_no_full_collection_falls_into_a_call_and_the_ticks_run_those_due(mujoco
         assert mujoco_sim.wait_for(lambda: 'tick' in full_collections)
     finally:
         gc.callbacks.remove(watch)
+
+
+def test_the_mujoco_data_a_spawn_or_delete_replaced_is_freed_in_a_tick_not_the_call(mujoco_sim):
+    world = mujoco_sim.world_node.world
+    freed = []
+    r2d2 = read_model('r2d2')
+    for count, change in enumerate((
+            lambda: mujoco_sim.spawn_entity('r2d2', r2d2, (1.0, 0.0, 0.0)),
+            lambda: mujoco_sim.delete_entity('r2d2')), start=1):
+        for replaced in (world.model, world.data):
+            weakref.finalize(replaced, lambda: freed.append(where_running()))
+        del replaced
+        change()
+        assert mujoco_sim.wait_for(lambda: len(freed) == 2 * count)  # freed, not kept
+    assert freed == ['tick'] * 4
