@@ -14,8 +14,13 @@ from service_tutorial.sim.validation import WorldError
 STATE_FIELDS = ('qpos', 'qvel', 'qacc_warmstart', 'qfrc_applied', 'act', 'ctrl')
 # Numbers the placements of every model (spawn, set state, reset), the latest highest.
 _PLACEMENTS = itertools.count(1)
-# Entries a joint has in qpos and in qvel, by type; hinges and slides have one of each.
-_JOINT_WIDTHS = {int(mujoco.mjtJoint.mjJNT_FREE): (7, 6), int(mujoco.mjtJoint.mjJNT_BALL): (4, 3)}
+
+
+def _run(addresses, first, end, size):
+    """Return the start and end of the entries of joints first to end (not included)."""
+    if first == end:
+        return 0, 0
+    return int(addresses[first]), int(addresses[end]) if end < len(addresses) else size
 
 
 def _offset(description):
@@ -157,27 +162,21 @@ class Model:
         """Find the model's elements in the world's compiled model, then its plugins'."""
         mj_model = world.model
         description = self.description
-        bodies = {self.element_id(mj_model, mujoco.mjtObj.mjOBJ_BODY, link)
-                  for link in description.links}
         self.root_id = self.element_id(mj_model, mujoco.mjtObj.mjOBJ_BODY, description.root_link)
+        # MuJoCo numbers bodies depth first, each body's joints one after the other in body
+        # order, and their qpos and dof entries in joint order: a model, a subtree of the
+        # world's body, has a run of each. Found with a few array sums, not a lookup by name
+        # per link: a batch spawn binds every new model.
+        bodies = int(np.count_nonzero(mj_model.body_rootid == self.root_id))
+        joint_counts = mj_model.body_jntnum
+        first = int(joint_counts[:self.root_id].sum())
+        end = first + int(joint_counts[self.root_id:self.root_id + bodies].sum())
+        self.qpos_index = np.arange(*_run(mj_model.jnt_qposadr, first, end, mj_model.nq))
+        self.dof_index = np.arange(*_run(mj_model.jnt_dofadr, first, end, mj_model.nv))
         self.free_qpos_adr = self.free_dof_adr = None
-        qpos, dofs = [], []
-        # Each body's joints are numbered one after the other (body_jntadr, body_jntnum), in
-        # body order: a batch spawn binds every new model over a model of all their joints.
-        for joint_id in [joint for body in sorted(bodies)
-                         for joint in range(mj_model.body_jntadr[body],
-                                            mj_model.body_jntadr[body]
-                                            + mj_model.body_jntnum[body])]:
-            kind = int(mj_model.jnt_type[joint_id])
-            qpos_adr = int(mj_model.jnt_qposadr[joint_id])
-            dof_adr = int(mj_model.jnt_dofadr[joint_id])
-            qpos_width, dof_width = _JOINT_WIDTHS.get(kind, (1, 1))
-            qpos.extend(range(qpos_adr, qpos_adr + qpos_width))
-            dofs.extend(range(dof_adr, dof_adr + dof_width))
-            if kind == mujoco.mjtJoint.mjJNT_FREE:
-                self.free_qpos_adr, self.free_dof_adr = qpos_adr, dof_adr
-        self.qpos_index = np.array(qpos, dtype=int)
-        self.dof_index = np.array(dofs, dtype=int)
+        if end > first and mj_model.jnt_type[first] == mujoco.mjtJoint.mjJNT_FREE:
+            self.free_qpos_adr, self.free_dof_adr = (int(self.qpos_index[0]),
+                                                     int(self.dof_index[0]))
         joints = np.array([self.element_id(mj_model, mujoco.mjtObj.mjOBJ_JOINT, name)
                            for name in description.joints], dtype=int)
         self.joint_qpos_adr = mj_model.jnt_qposadr[joints].astype(int)
