@@ -39,7 +39,7 @@ from service_tutorial.world_node.collections_between_ticks import CollectionsBet
 from service_tutorial.world_node.gazebo_services import GazeboServices
 from service_tutorial.world_node.gz_bridge import GzBridge
 from service_tutorial.world_node.log_forwarding import forward_core_logs, log_here
-from service_tutorial.world_node.model_interface import ModelInterface
+from service_tutorial.world_node.model_interface import ModelInterface, Roster
 from service_tutorial.world_node.pacing import CLOCK_STREAM, JOINT_STATES_STREAM
 from service_tutorial.world_node.pacing import heard_by_pacer, ODOMETRY_STREAM, Pacer
 from service_tutorial.world_node.packages import package_share
@@ -147,6 +147,7 @@ class MujocoWorld(Node):
                                     for stream, name in RATE_PARAMETERS.items()})
         self._clock_msg = Clock()
         self.models = {}  # name -> ModelInterface, in spawn order
+        self._roster = Roster(())  # their faces; None: to gather again (roster())
         # How the gz-sim systems' and sensors' gz topics are served on ROS (set_gz_bridge).
         self.gz_bridge = GzBridge()
         self._next_gz_bridge = None
@@ -251,8 +252,8 @@ class MujocoWorld(Node):
         pacer.start_tick()
         self.apply_gz_bridge()
         self.make_model_topics()
-        for model in self.models.values():
-            model.take_commands()  # they never wake the executor: see taken_at_tick.py
+        for take_commands in self.roster().take_commands:
+            take_commands()  # they never wake the executor: see taken_at_tick.py
         stepping = self.requested_steps
         period_ns = 0 if stepping.busy else pacer.tick_period_ns(world.paused)
         if self.step_timer.timer_period_ns != period_ns:
@@ -284,21 +285,20 @@ class MujocoWorld(Node):
             self.forget_model(removal.name)
             self._announce_removal(removal)
         self.world.background_renders.deliver()  # the cameras' frames drawn meanwhile
-        now = self.world.time
+        now, roster = self.world.time, self.roster()
         for stream, stamp in self.pacer.take_due(now):
             if stream == CLOCK_STREAM:
                 self._publish_clock_msg(stamp)
             else:
-                for model in self.models.values():
-                    model.publish(stream, stamp)
+                for publish in roster.publishing.get(stream, ()):
+                    publish(stream, stamp)
                 self.tf_batch.send()
         wall = time.monotonic()
         if wall >= self._next_face_look:
             self._next_face_look = wall + FACE_LOOK_PERIOD
-            for model in self.models.values():
-                for watcher in model.watchers:
-                    if wall >= watcher.next_look:
-                        watcher.look(wall)
+            for watcher in roster.watchers:
+                if wall >= watcher.next_look:
+                    watcher.look(wall)
         self.camera_stream.publish_due(now)
 
     def _announce_removal(self, removal):
@@ -361,6 +361,7 @@ class MujocoWorld(Node):
     def make_model_topics(self):
         """Make the topics of the models spawned since the last call, if still in the world."""
         waiting, self._topics_to_make = self._topics_to_make, []
+        self._roster = None if waiting else self._roster
         for interface in waiting:
             name = interface.model_name
             if self.models.get(name) is not interface:
@@ -398,6 +399,7 @@ class MujocoWorld(Node):
         bridge, self._next_gz_bridge = self._next_gz_bridge, None
         if bridge is None:
             return
+        self._roster = None
         if bridge is not self.gz_bridge:
             bridge.on_change(lambda: self.set_gz_bridge(bridge))
         self.gz_bridge = bridge
@@ -425,6 +427,13 @@ class MujocoWorld(Node):
         interface = self.models.pop(name, None)
         if interface is not None:
             interface.destroy()
+            self._roster = None
+
+    def roster(self):
+        """Return the Roster of the models' faces, gathered again after a change."""
+        if self._roster is None:
+            self._roster = Roster(self.models.values())
+        return self._roster
 
     def after_reset(self):
         """
