@@ -91,8 +91,11 @@ class BridgeChannel:
         """Hear the bridges on node's graph and set their mappings in the node's GzBridge."""
         self.node = node
         self._presences = {}  # bridge full name -> Presence of the process in force
+        # Without rclpy's default handlers of incompatible QoS, which would add two waitables to
+        # every turn of the world's executor, each tick's.
         self.bridges_sub = node.create_subscription(
-            String, BRIDGES_TOPIC, self.bridges_callback, BRIDGES_QOS)
+            String, BRIDGES_TOPIC, self.bridges_callback, BRIDGES_QOS,
+            event_callbacks=SubscriptionEventCallbacks(use_default_callbacks=False))
         # Runs only while a presence is listed on the graph but not matched yet; on the steady
         # wall clock, since simulation time stands still in a paused world (or one with
         # use_sim_time).
