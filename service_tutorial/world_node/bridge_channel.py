@@ -91,8 +91,8 @@ class BridgeChannel:
         """Hear the bridges on node's graph and set their mappings in the node's GzBridge."""
         self.node = node
         self._presences = {}  # bridge full name -> Presence of the process in force
-        # Without rclpy's default handlers of incompatible QoS, which would add two waitables to
-        # every turn of the world's executor, each tick's.
+        # Without rclpy's default handlers of incompatible QoS: two more waitables in the turn
+        # of the world's executor at every tick.
         self.bridges_sub = node.create_subscription(
             String, BRIDGES_TOPIC, self.bridges_callback, BRIDGES_QOS,
             event_callbacks=SubscriptionEventCallbacks(use_default_callbacks=False))

@@ -361,7 +361,8 @@ class MujocoWorld(Node):
     def make_model_topics(self):
         """Make the topics of the models spawned since the last call, if still in the world."""
         waiting, self._topics_to_make = self._topics_to_make, []
-        self._roster = None if waiting else self._roster
+        if waiting:
+            self._roster = None  # the new faces join it, or the refused ones leave it
         for interface in waiting:
             name = interface.model_name
             if self.models.get(name) is not interface:
