@@ -171,6 +171,12 @@ class Services:
                       'get_model_list': GetModelList, 'get_model_state': GetModelState,
                       'set_model_state': SetModelState, 'reset_world': Empty,
                       'reset_simulation': Empty}
+        # Each type's support is loaded on first use, and not safely from several threads at
+        # once: the clients of the same-name phase, started together, raised TypeError
+        # ('NoneType' is not a 'capsule') converting their first request.
+        from rclpy.type_support import check_for_type_support
+        for srv_type in self.types.values():
+            check_for_type_support(srv_type)
 
     def call(self, service, **fields):
         """Call a world service with the given request fields."""
