@@ -18,7 +18,7 @@ from harness import BenchmarkError, ExecutorThread, prompt_thread_switches, quie
 from harness import THREAD_SWITCH_INTERVAL, wait_until
 import mujoco
 from rcl_client import RclClient, Sequence, String
-from report import median_ms, Table
+from report import median_ms, percentiles, Table
 from round_trips import TrivialService
 from service_tutorial.testing.spawns import spawn_robot
 from spawn_cost import BareWorld
@@ -38,6 +38,12 @@ TINYBOT_URI = 'package://service_tutorial/models/tinybot.urdf'
 TOPICS_PER_TINYBOT = 8
 # Steps the driving fleet takes before the stepping rounds, and to check it drives.
 STEP_WARM_UP = 500
+# A call that comes while StepSimulation steps waits for the tick in progress: its p99 at most
+# this (ms). A tick steps for 50 ms of wall time at most.
+DURING_STEPPING_LIMIT = 200.0
+# The most steps one StepSimulation takes: far more than the calls during it last (10 tinybots
+# step about 8,000 times a wall second). Playing ends it (set_simulation_state).
+LONG_STEPPING = 1_000_000
 RESULT_OK = 1  # simulation_interfaces/msg/Result
 
 
@@ -345,10 +351,43 @@ def step_rounds(observer, config):
                     samples[key].append(value)
         if angular_speed(world, fleet.names[0]) < 0.8 * DRIVE_ANGULAR_Z:
             raise BenchmarkError(f'{fleet.names[0]} stopped turning during the measurement')
+        samples.update(calls_during_stepping(observer, world, config.standard_calls))
         return samples
     finally:
         fleet.destroy()
         world.close()
+
+
+def calls_during_stepping(observer, world, count):
+    """
+    Time get_model_list and Trigger, in turns, while one StepSimulation of LONG_STEPPING steps.
+
+    Return the times in s by name ('during stepping', 'trigger during stepping'). Playing ends
+    the stepping (set_simulation_state); the world is paused again afterwards.
+    """
+    from simulation_interfaces.msg import SimulationState
+    from simulation_interfaces.srv import SetSimulationState, StepSimulation
+    from srv_interfaces.srv import GetModelList
+    stepping = observer.call_async(StepSimulation, '/step_simulation',
+                                   StepSimulation.Request(steps=LONG_STEPPING))
+    samples = {'during stepping': [], 'trigger during stepping': []}
+    observer.wait_for_service(GetModelList, '/mujoco/get_model_list')
+    try:
+        for _ in range(count):
+            start = time.perf_counter()
+            answer = observer.call(GetModelList, '/mujoco/get_model_list', GetModelList.Request())
+            samples['during stepping'].append(time.perf_counter() - start)
+            if not answer.success:
+                raise BenchmarkError(f'get_model_list failed: {answer.status_message}')
+            samples['trigger during stepping'].append(world.trigger())
+            if stepping.done():
+                raise BenchmarkError(f'StepSimulation ended during the calls: {stepping.result()}')
+    finally:
+        for target in (SimulationState.STATE_PLAYING, SimulationState.STATE_PAUSED):
+            world.call(SetSimulationState, '/set_simulation_state', SetSimulationState.Request(
+                state=SimulationState(state=target)))
+    wait_until(stepping.done, 'StepSimulation did not end when the world played')
+    return samples
 
 
 def _row(figure, rounds, measured, reference, trigger, limit):
@@ -396,6 +435,11 @@ def standard_table(observer, config):
                            f'mj_step + {TRIGGERS_ALLOWED:g} x Trigger (best of rounds)',
                            len(stepping['stepping']), 1e3 * min(stepping['stepping']), bare,
                            trigger, STEP_LIMIT * bare + TRIGGERS_ALLOWED * trigger))
+    during = stepping['during stepping']
+    table.rows.append(_row(f'get_model_list p99 while StepSimulation steps <= '
+                           f'{DURING_STEPPING_LIMIT:g} ms', len(during), percentiles(during)[2],
+                           median_ms(during), median_ms(stepping['trigger during stepping']),
+                           DURING_STEPPING_LIMIT))
     trigger = median_ms(states['trigger'])
     core = median_ms(states['core states'])
     table.rows.append(_row(f'GetEntitiesStates of {count} entities <= core + '

@@ -36,9 +36,10 @@ EXPECTED_ROWS = {
     'turning': len(QUICK.durations) * len(QUICK.velocities),
     'targets': (1 + 3 + 2 * len(QUICK.growth_counts) + 6 * len(QUICK.cost_counts) + 1
                 + 2 * len(QUICK.robot_counts)
-                + (report.CPU_TARGET_ROBOTS in QUICK.robot_counts) + 1 + 1 + 4 + 3 + 3
+                + (report.CPU_TARGET_ROBOTS in QUICK.robot_counts) + 1 + 1 + 5 + 3 + 3
                 + len(QUICK.cost_counts) + GZ_TARGETS),
-    'core': 2,
+    # a spawn of R2-D2, World.step against mj_step, a box against the hull of many points
+    'core': 3,
     # cold spawn, warm spawn and delete of two robots per world size, and the box sequence
     'spawn_cost': 6 * len(QUICK.cost_counts) + 1,
     # a cold spawn of R2-D2 from SDF against the same from URDF, per world size
@@ -46,9 +47,9 @@ EXPECTED_ROWS = {
     'camera': 1,
     'sensors': 5,
     'answers': 3,
-    # SpawnEntities against MuJoCo's batch and against single spawns, StepSimulation, states
-    # from a C client, and (no limit) from rclpy's client
-    'standard_interfaces': 5,
+    # SpawnEntities against MuJoCo's batch and against single spawns, StepSimulation, calls
+    # during it, states from a C client, and (no limit) from rclpy's client
+    'standard_interfaces': 6,
     # LoadWorld of the parking world, the yard and the yard in SDF, each against the core's
     # build of it
     'world_loading': 3,

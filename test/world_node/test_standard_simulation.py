@@ -383,11 +383,15 @@ def test_a_long_action_lets_other_services_answer_and_stops_on_cancel(paused_wor
     world = paused_world
     goal = Goal(world, LONGEST)
     assert world.ros.wait_for(lambda: goal.feedback), 'no feedback'
+    stepped_before = goal.feedback[-1][1]
     for _ in range(5):
-        started = time.monotonic()
         assert world.models() == ['tinybot']
-        assert time.monotonic() - started < 0.2
         assert state(world) == PAUSED
+        # Answered while the action was stepping, not after it: it has no end. How soon is
+        # the benchmark's (its standard section: get_model_list while StepSimulation steps).
+        assert not goal.result_future.done()
+    # The action went on stepping between the answers.
+    assert world.ros.wait_for(lambda: goal.feedback[-1][1] > stepped_before)
     assert step(world, 10).result == Result.RESULT_INCORRECT_STATE  # one stepping at a time
     cancel = goal.handle.cancel_goal_async()
     assert world.ros.wait_for(cancel.done)
