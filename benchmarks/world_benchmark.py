@@ -79,7 +79,7 @@ class Config:
     turning_check_point: tuple = (2, 1.0)  # (s, rad/s) of that check
     core_spawns: int = 5                   # R2-D2s spawned into a World in this process
     cost_counts: tuple = (1, 50)           # tinybots present for the spawn-cost rows
-    cost_calls: int = 20                   # spawn/delete cycles per spawn-cost row
+    cost_calls: int = 60                   # spawn/delete cycles per spawn-cost row
     box_count: int = 200                   # boxes spawned, then deleted, in the box row
     step_rounds: int = 5                   # World.step against bare mj_step, best of
     step_count: int = 1000                 # steps per round
