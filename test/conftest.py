@@ -121,8 +121,8 @@ class RosHarness:
 
     def action_client(self, action_type, action_name):
         """Make an action client on the client node; it is destroyed after the test."""
-        from rclpy.action import ActionClient
-        client = ActionClient(self.client_node, action_type, action_name)
+        from service_tutorial.lesson.goal_client import GoalClient
+        client = GoalClient(self.client_node, action_type, action_name)
         self._action_clients.append(client)
         return client
 

@@ -15,10 +15,10 @@ import threading
 
 from action_msgs.msg import GoalStatus
 import rclpy
-from rclpy.action import ActionClient
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.signals import SignalHandlerOptions
+from service_tutorial.lesson.goal_client import GoalClient
 from service_tutorial.lesson.model_services import response_text
 from service_tutorial.lesson.turning_input import ask_turning_request, given_or_asked
 from service_tutorial.lesson.turning_input import MAX_ANGLE, MAX_ANGULAR_VEL
@@ -69,7 +69,7 @@ class RobotTurningActionClient(Node):
 
     def __init__(self, **kwargs):
         super().__init__('robot_turning_action_client', **kwargs)
-        self.turn_robot_client = ActionClient(self, TurnRobot, 'turn_robot')
+        self.turn_robot_client = GoalClient(self, TurnRobot, 'turn_robot')
         self.action_name = self.resolve_service_name('turn_robot')
         self.angle = 0.0
         # On a terminal each report overwrites the last; in a pipe each gets a line.
@@ -77,6 +77,10 @@ class RobotTurningActionClient(Node):
         self.progress_shown = False
         self.output_closed = False
         self.spinner = None
+        # Feedback is shown until the goal is being cancelled or has ended; the lock keeps a
+        # report from coming after the line that says so.
+        self.following = True
+        self.output_lock = threading.Lock()
 
     def spin_in_background(self):
         """Spin in a thread of its own, leaving the main thread free to take Ctrl-C at once."""
@@ -100,8 +104,14 @@ class RobotTurningActionClient(Node):
             goal, feedback_callback=self.feedback_callback)
 
     def feedback_callback(self, feedback_msg):
-        """Show how far the robot has turned."""
+        """Show how far the robot has turned, while the goal is followed."""
         text = progress_text(feedback_msg.feedback, self.angle)
+        with self.output_lock:
+            if self.following:
+                self.show_progress(text)
+
+    def show_progress(self, text):
+        """Print a progress line: over the last one on a terminal."""
         try:
             if self.on_terminal:
                 # Back to the start of the line, write, clear what a longer report left.
@@ -114,10 +124,12 @@ class RobotTurningActionClient(Node):
         self.progress_shown = True
 
     def end_progress(self):
-        """Move past a progress line that the next report would have overwritten."""
-        if self.on_terminal and self.progress_shown:
-            print()
-        self.progress_shown = False
+        """Stop showing feedback; move past a progress line the next would have overwritten."""
+        with self.output_lock:
+            self.following = False
+            if self.on_terminal and self.progress_shown:
+                print()
+            self.progress_shown = False
 
     def wait(self, future):
         """Wait for a future the spinning thread completes; Ctrl-C interrupts the wait."""

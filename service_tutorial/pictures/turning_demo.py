@@ -25,12 +25,12 @@ import time
 from action_msgs.msg import GoalStatus
 from ament_index_python.packages import get_package_prefix, PackageNotFoundError
 import rclpy
-from rclpy.action import ActionClient
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.signals import SignalHandlerOptions
 from service_tutorial.conversions import seconds_of, yaw_of
 from service_tutorial.lesson import model_services
+from service_tutorial.lesson.goal_client import GoalClient
 from service_tutorial.lesson.model_services import response_text
 from service_tutorial.lesson.r2d2 import spawn_pose
 from service_tutorial.node_main import program_arguments
@@ -245,7 +245,7 @@ def send_turn_goal(node, angle, angular_vel, *, cancel_at=None):
     With cancel_at, the goal is canceled once the feedback says it has turned that far.
     Return the goal's final status, its result, the feedback and the ground truth turn.
     """
-    turning_client = ActionClient(node, TurnRobot, 'turn_robot')
+    turning_client = GoalClient(node, TurnRobot, 'turn_robot')
     heading = HeadingFollower(node)
     feedback = []
     reached = threading.Event()

@@ -12,12 +12,12 @@ from nav_msgs.msg import Odometry
 from programs import program_path
 import pytest
 from rcl_interfaces.srv import DescribeParameters
-from rclpy.action import ActionClient
 from rclpy.clock import ClockChange, TimeJump
 from rclpy.duration import Duration
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 from service_tutorial.conversions import make_pose, seconds_of, time_msg, yaw_of
+from service_tutorial.lesson.goal_client import GoalClient
 from service_tutorial.lesson.model_services import model_path
 from service_tutorial.lesson.robot_turning_action_server import RobotTurningActionServer
 from service_tutorial.testing.simulated_world import SimulatedWorld
@@ -47,7 +47,7 @@ class SteppedActionWorld:
             user = self.world.add_node(Node('turning_test', context=context))
             self.cmd_vel = []
             user.create_subscription(Twist, '/cmd_vel', self.cmd_vel.append, 100)
-            self.action_client = ActionClient(user, TurnRobot, '/turn_robot')
+            self.action_client = GoalClient(user, TurnRobot, '/turn_robot')
             assert self.action_client.wait_for_server(timeout_sec=10.0)
         except BaseException:
             self.world.close()
