@@ -203,14 +203,37 @@ class RosHarness:
         return bool(predicate())
 
     def shutdown(self):
-        """Stop every executor and destroy every action client and node the test used."""
+        """
+        Stop every executor and destroy every action client and node the test used.
+
+        A node that stays in the graph after destroy_node() is still held by something (an
+        ActionServer that was not destroyed keeps its node alive): the test fails, as the
+        node would go on answering the tests that come after it.
+        """
         for client in self._action_clients:
             client.destroy()
+        client_node = self.client_node
+        listed = client_node.get_node_names_and_namespaces
+        before = listed()
+        destroyed = []  # (name, namespace) of each node of the client's context destroyed
         for node, executor, thread in reversed(self._spinning):
             executor.stop()
             thread.join(timeout=5.0)
             executor.shutdown(timeout_sec=5.0)
-            node.destroy_node()
+            if node is not client_node:
+                if node.context is client_node.context:
+                    destroyed.append((node.get_name(), node.get_namespace()))
+                node.destroy_node()
+
+        def left_behind():
+            now = listed()
+            return sorted(name for name in set(destroyed)
+                          if now.count(name) > before.count(name) - destroyed.count(name))
+        try:
+            assert self.wait_for(lambda: not left_behind()), \
+                f'nodes still in the graph after destroy_node(): {left_behind()}'
+        finally:
+            client_node.destroy_node()
 
 
 @pytest.fixture
