@@ -2,6 +2,7 @@
 
 import os
 import subprocess
+import threading
 
 from ament_index_python.packages import get_package_prefix
 
@@ -17,3 +18,20 @@ def run_program(name, *args, stdin=None, timeout=60):
     """Run an installed program to its end, with stdin typed in if given; return the process."""
     return subprocess.run([program_path(name), *args], input=stdin, capture_output=True,
                           text=True, timeout=timeout)
+
+
+def lines_of(process, *, timeout=60):
+    """
+    Yield the lines a started program prints, as they come.
+
+    A net for a hang, not a time limit: a program still printing nothing after timeout s is
+    killed, which ends the lines, so that the test fails on what it then reads instead of
+    waiting for ever.
+    """
+    watchdog = threading.Timer(timeout, process.kill)
+    watchdog.start()
+    try:
+        for line in process.stdout:  # not yield from: closing this must leave stdout open
+            yield line
+    finally:
+        watchdog.cancel()

@@ -5,7 +5,7 @@ import re
 import signal
 
 from geometry_msgs.msg import Twist
-from programs import program_path, run_program
+from programs import lines_of, program_path, run_program
 import pytest
 from rclpy.parameter import Parameter
 from service_tutorial.lesson.robot_turning_action_client import ANGLE_PROMPT
@@ -102,7 +102,7 @@ def test_ctrl_c_cancels_the_goal_and_tinybot_stops(action_world, start_program):
     truth.wait_at_rest()
     before = truth.last
     client = start_program([CLIENT, '2.0', '0.5'])
-    for line in client.stdout:
+    for line in lines_of(client):
         if progress(line) and progress(line)[0] > 0.2:
             break
     client.send_signal(signal.SIGINT)
@@ -126,7 +126,7 @@ def test_ctrl_c_cancels_the_goal_and_tinybot_stops(action_world, start_program):
 @pytest.mark.long
 def test_a_reader_that_goes_away_ends_the_client_quietly(action_world, start_program):
     client = start_program([CLIENT, '2.0', '0.5'])
-    for line in client.stdout:
+    for line in lines_of(client):
         if progress(line):
             break
     client.stdout.close()  # as `robot_turning_action_client 2.0 0.5 | head -2` would
@@ -138,7 +138,7 @@ def test_a_reader_that_goes_away_ends_the_client_quietly(action_world, start_pro
 
 def test_client_prints_why_a_reset_aborted_the_goal(action_world, start_program):
     client = start_program([CLIENT, '3.0', '0.5'])
-    for line in client.stdout:
+    for line in lines_of(client):
         if progress(line) and progress(line)[0] > 0.2:
             break
 

@@ -8,7 +8,7 @@ import socket
 import subprocess
 import urllib.request
 
-from programs import program_path, run_program
+from programs import lines_of, program_path, run_program
 import pytest
 
 pytestmark = pytest.mark.ros
@@ -79,7 +79,7 @@ def test_ctrl_c_mid_demo_stops_the_children(tmp_path, start_program):
     demo = start_program([program_path('turning_demo'), '--log-dir', str(tmp_path)],
                          stderr=subprocess.STDOUT)
     seen = []
-    for line in demo.stdout:
+    for line in lines_of(demo):
         seen.append(line)
         if line.startswith('[2/6]'):
             break
@@ -102,7 +102,7 @@ def test_web_prints_the_page_address_serves_it_and_ctrl_c_ends_it_cleanly(tmp_pa
     demo = start_program([program_path('turning_demo'), '--web', '--web-port', str(port),
                           '--log-dir', str(tmp_path)], stderr=subprocess.STDOUT)
     seen = []
-    for line in demo.stdout:
+    for line in lines_of(demo):
         seen.append(line)
         if "the world's web page: " in line:
             break
