@@ -24,9 +24,9 @@ def lines_of(process, *, timeout=60):
     """
     Yield the lines a started program prints, as they come.
 
-    A net for a hang, not a time limit: a program still printing nothing after timeout s is
-    killed, which ends the lines, so that the test fails on what it then reads instead of
-    waiting for ever.
+    A net for a hang, not a time limit: timeout s after the reading starts, a program whose
+    lines have not ended (or been left) is killed, which ends them, so that the test fails on
+    what it then reads instead of waiting for ever.
     """
     watchdog = threading.Timer(timeout, process.kill)
     watchdog.start()
